@@ -1,0 +1,20 @@
+# Every third-party package Tendril uses, found once and gathered in the interface target
+# tendril_deps. All are Debian 12 packages installed by scripts/setup.
+find_package(Eigen3 3.4 REQUIRED NO_MODULE)
+find_package(embree 3 REQUIRED)
+find_package(TBB REQUIRED)
+find_package(nlohmann_json 3.10 REQUIRED)
+find_package(assimp REQUIRED)
+find_package(TinyGLTF REQUIRED)
+find_package(spdlog REQUIRED)
+find_package(fmt REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(Threads REQUIRED)
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(MUPARSER REQUIRED IMPORTED_TARGET muparser)
+pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)
+
+add_library(tendril_deps INTERFACE)
+target_link_libraries(tendril_deps INTERFACE
+  Eigen3::Eigen embree TBB::tbb nlohmann_json::nlohmann_json assimp::assimp TinyGLTF::TinyGLTF
+  spdlog::spdlog fmt::fmt PkgConfig::MUPARSER PkgConfig::STB Threads::Threads)
