@@ -132,7 +132,7 @@ void validate(const PlantModel& p, const std::string& source) {
     if (!pr.nodeFromPrimitive.allFinite()) throw bad("transform is not finite");
   }
   for (size_t i = 0; i < p.meshes.size(); ++i) {
-    const PrimitiveMesh& mesh = p.meshes[i];
+    const TriangleMesh& mesh = p.meshes[i].mesh;
     auto bad = [&](const std::string& what) {
       return Error(source, fmt::format("mesh {}", i), fmt::format("plant \"{}\": {}", p.name, what));
     };
@@ -198,11 +198,12 @@ uint64_t contentHash(const PlantModel& p) {
   h.add(uint64_t(p.meshes.size()));
   for (const PrimitiveMesh& m : p.meshes) {
     h.add(std::string_view(m.name));
-    h.add(m.positions);
-    h.add(m.normals);
-    h.add(m.uvs);
-    h.add(m.indices);
+    h.add(m.mesh.positions);
+    h.add(m.mesh.normals);
+    h.add(m.mesh.uvs);
+    h.add(m.mesh.indices);
     h.add(m.color);
+    h.add(std::string_view(m.texture));
   }
   h.add(uint64_t(p.primitives.size()));
   for (const Primitive& pr : p.primitives) {

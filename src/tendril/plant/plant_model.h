@@ -13,6 +13,7 @@
 #pragma once
 
 #include "tendril/core/math.h"
+#include "tendril/core/triangle_mesh.h"
 
 #include <cstdint>
 #include <string>
@@ -43,14 +44,12 @@ struct BarkMaterial {
   float roughness = 0.9f;
 };
 
-// A triangle mesh in the local frame of a primitive.
+// A mesh in the local frame of a primitive, with its material colour.
 struct PrimitiveMesh {
   std::string name;
-  std::vector<Vec3> positions;
-  std::vector<Vec3> normals;  // empty = flat shading is computed downstream
-  std::vector<Vec2> uvs;      // empty or one per position
-  std::vector<uint32_t> indices;
-  Vec3 color = Vec3(0.8f, 0.8f, 0.8f);
+  TriangleMesh mesh;
+  Vec3 color = Vec3(0.8f, 0.8f, 0.8f);  // linear RGB
+  std::string texture;                   // optional image path or "builtin:<name>"
 };
 
 struct Primitive {
