@@ -1,18 +1,22 @@
 #include "tendril/core/triangle_mesh.h"
 
-#include <cassert>
-
 namespace tendril {
 
 void TriangleMesh::append(const TriangleMesh& o) {
+  // An attribute survives only if both meshes have it (or this one was empty).
   bool wasEmpty = positions.empty();
+  bool keepNormals = !o.normals.empty() && (wasEmpty || !normals.empty());
+  bool keepUvs = !o.uvs.empty() && (wasEmpty || !uvs.empty());
   uint32_t base = static_cast<uint32_t>(positions.size());
   positions.insert(positions.end(), o.positions.begin(), o.positions.end());
-  if (wasEmpty || !normals.empty()) {
-    assert(o.normals.empty() == (normals.empty() && !wasEmpty) || wasEmpty);
+  if (keepNormals)
     normals.insert(normals.end(), o.normals.begin(), o.normals.end());
-  }
-  if (wasEmpty || !uvs.empty()) uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
+  else
+    normals.clear();
+  if (keepUvs)
+    uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
+  else
+    uvs.clear();
   indices.reserve(indices.size() + o.indices.size());
   for (uint32_t i : o.indices) indices.push_back(base + i);
 }
