@@ -1,0 +1,545 @@
+#include "tendril/env/environment.h"
+
+#include "tendril/core/error.h"
+#include "tendril/core/log.h"
+#include "tendril/env/sdf.h"
+#include "tendril/env/topology.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <limits>
+#include <mutex>
+#include <unordered_map>
+
+namespace tendril::env {
+
+namespace {
+
+RTCDevice embreeDevice() {
+  static RTCDevice device = [] {
+    RTCDevice d = rtcNewDevice(nullptr);
+    if (!d) throw Error("Embree", "", "cannot create the ray tracing device");
+    rtcSetDeviceErrorFunction(
+        d, [](void*, RTCError code, const char* str) { log::error("Embree error {}: {}", int(code), str ? str : ""); },
+        nullptr);
+    return d;
+  }();
+  return device;
+}
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+}  // namespace
+
+const char* obstacleKindName(ObstacleKind kind) {
+  switch (kind) {
+    case ObstacleKind::Plane: return "plane";
+    case ObstacleKind::Box: return "box";
+    case ObstacleKind::Sphere: return "sphere";
+    case ObstacleKind::Cylinder: return "cylinder";
+    case ObstacleKind::Wall: return "wall";
+    case ObstacleKind::Mesh: return "mesh";
+  }
+  return "mesh";
+}
+
+struct Environment::ObstacleData {
+  ObstacleInfo info;
+  float sdfCell = 0.0f;
+  WeldedMesh welded;        // local frame
+  Pseudonormals normals;    // local frame, only when closed
+  std::vector<Vec3> world;  // welded vertices in world space (+1 padding element for Embree)
+  std::vector<Vec3> faceNormalWorld;
+  RTCGeometry geometry = nullptr;
+  bool moved = true;
+  mutable std::once_flag sdfOnce;
+  mutable SdfGrid sdf;
+
+  ~ObstacleData() {
+    if (geometry) rtcReleaseGeometry(geometry);
+  }
+
+  void updateWorld() {
+    const RigidTransform& t = info.worldFromLocal;
+    world.resize(welded.positions.size() + 1);
+    for (size_t i = 0; i < welded.positions.size(); ++i) world[i] = t.applyPoint(welded.positions[i]);
+    world.back() = Vec3::Zero();
+    faceNormalWorld.resize(welded.indices.size() / 3);
+    for (size_t f = 0; f < faceNormalWorld.size(); ++f) {
+      const uint32_t* tri = &welded.indices[3 * f];
+      Vec3 n = (world[tri[1]] - world[tri[0]]).cross(world[tri[2]] - world[tri[0]]);
+      float len = n.norm();
+      faceNormalWorld[f] = len > 0.0f ? Vec3(n / len) : Vec3::UnitY();
+    }
+    info.worldBounds = Bounds3();
+    for (size_t i = 0; i + 1 < world.size(); ++i) info.worldBounds.extend(world[i]);
+  }
+};
+
+// Uniform hash grid over stroke points, cell = the largest stroke radius.
+struct Environment::StrokeGrid {
+  float cell = 1.0f;
+  std::vector<Vec3> points;
+  std::vector<uint32_t> stroke;  // per point
+  std::unordered_map<uint64_t, std::vector<uint32_t>> cells;
+
+  static uint64_t key(int x, int y, int z) {
+    auto u = [](int v) { return static_cast<uint64_t>(static_cast<uint32_t>(v + (1 << 20))) & 0x1fffff; };
+    return u(x) | (u(y) << 21) | (u(z) << 42);
+  }
+  Eigen::Vector3i cellOf(const Vec3& p) const {
+    return Eigen::Vector3i(int(std::floor(p.x() / cell)), int(std::floor(p.y() / cell)), int(std::floor(p.z() / cell)));
+  }
+};
+
+namespace {
+
+// Closest point search shared by world queries and SDF construction.
+struct ClosestSearch {
+  const Vec3* const* vertices;    // per geometry id
+  const uint32_t* const* indices; // per geometry id
+  Vec3 p;
+  float bestDist2;
+  Vec3 bestPoint = Vec3::Zero();
+  uint32_t bestGeom = RTC_INVALID_GEOMETRY_ID;
+  uint32_t bestPrim = RTC_INVALID_GEOMETRY_ID;
+  TriangleFeature bestFeature = TriangleFeature::Face;
+};
+
+bool closestCallback(RTCPointQueryFunctionArguments* args) {
+  auto* s = static_cast<ClosestSearch*>(args->userPtr);
+  const Vec3* v = s->vertices[args->geomID];
+  const uint32_t* tri = s->indices[args->geomID] + 3 * size_t(args->primID);
+  ClosestOnTriangle c = closestPointOnTriangle(s->p, v[tri[0]], v[tri[1]], v[tri[2]]);
+  float d2 = (c.point - s->p).squaredNorm();
+  // Ties are broken by (geometry, primitive) so the answer never depends on traversal order.
+  bool better = d2 < s->bestDist2 ||
+                (d2 == s->bestDist2 && (args->geomID < s->bestGeom ||
+                                        (args->geomID == s->bestGeom && args->primID < s->bestPrim)));
+  if (!better) return false;
+  s->bestDist2 = d2;
+  s->bestPoint = c.point;
+  s->bestGeom = args->geomID;
+  s->bestPrim = args->primID;
+  s->bestFeature = c.feature;
+  float r = std::sqrt(d2);
+  if (r < args->query->radius) {
+    args->query->radius = r;
+    return true;
+  }
+  return false;
+}
+
+void runClosest(RTCScene scene, ClosestSearch& s, float radius) {
+  RTCPointQuery q;
+  q.x = s.p.x();
+  q.y = s.p.y();
+  q.z = s.p.z();
+  q.time = 0.0f;
+  q.radius = radius;
+  RTCPointQueryContext ctx;
+  rtcInitPointQueryContext(&ctx);
+  rtcPointQuery(scene, &q, &ctx, closestCallback, &s);
+}
+
+// Directions spread evenly over a cone (Fibonacci spiral): deterministic soft-shadow samples.
+Vec3 coneSample(const Vec3& axis, float halfAngle, int i, int n) {
+  if (n <= 1 || halfAngle <= 0.0f) return axis;
+  const float golden = kPi * (3.0f - std::sqrt(5.0f));
+  float cosMax = std::cos(halfAngle);
+  float c = 1.0f - (float(i) + 0.5f) / float(n) * (1.0f - cosMax);
+  float s = std::sqrt(std::max(0.0f, 1.0f - c * c));
+  float phi = golden * float(i);
+  Vec3 u = anyPerpendicular(axis);
+  Vec3 v = axis.cross(u);
+  return (axis * c + (u * std::cos(phi) + v * std::sin(phi)) * s).normalized();
+}
+
+}  // namespace
+
+Environment::Environment() : strokeGrid_(std::make_unique<StrokeGrid>()) {}
+
+Environment::~Environment() {
+  if (scene_) rtcReleaseScene(static_cast<RTCScene>(scene_));
+}
+
+uint32_t Environment::addObstacle(ObstacleDef def) {
+  auto o = std::make_unique<ObstacleData>();
+  o->welded = weld(def.mesh);
+  TopologyReport topo = analyzeTopology(o->welded);
+  // A closed mesh wound inside-out is turned right-side out so that normals face outward.
+  if (topo.closed() && topo.signedVolume < 0.0) {
+    for (size_t t = 0; t + 2 < o->welded.indices.size(); t += 3)
+      std::swap(o->welded.indices[t + 1], o->welded.indices[t + 2]);
+    topo.signedVolume = -topo.signedVolume;
+  }
+  bool closed = topo.closed() && topo.signedVolume > 0.0;
+  if (!closed)
+    log::warn("obstacle \"{}\" ({}) is not a closed mesh ({} boundary, {} non-manifold, {} inconsistently "
+              "wound edges): its distances are unsigned, so nothing is ever 'inside' it",
+              def.name, def.source, topo.boundaryEdges, topo.nonManifoldEdges, topo.inconsistentEdges);
+  if (closed) o->normals = computePseudonormals(o->welded);
+  o->info.name = def.name;
+  o->info.kind = def.kind;
+  o->info.source = def.source;
+  o->info.worldFromLocal = def.worldFromLocal;
+  o->info.color = def.color;
+  o->info.closed = closed;
+  o->info.triangles = o->welded.indices.size() / 3;
+  for (const Vec3& p : o->welded.positions) o->info.localBounds.extend(p);
+  o->sdfCell = def.sdfCell;
+  o->updateWorld();
+  obstacles_.push_back(std::move(o));
+  dirty_ = true;
+  return static_cast<uint32_t>(obstacles_.size() - 1);
+}
+
+void Environment::setObstacleTransform(uint32_t id, const RigidTransform& t) {
+  ObstacleData& o = *obstacles_.at(id);
+  o.info.worldFromLocal = t;
+  o.updateWorld();
+  o.moved = true;
+  dirty_ = true;
+}
+
+size_t Environment::obstacleCount() const { return obstacles_.size(); }
+const ObstacleInfo& Environment::obstacle(uint32_t id) const { return obstacles_.at(id)->info; }
+
+TriangleMesh Environment::obstacleMesh(uint32_t id) const {
+  const ObstacleData& o = *obstacles_.at(id);
+  TriangleMesh m;
+  m.positions = o.welded.positions;
+  m.indices = o.welded.indices;
+  return m;
+}
+
+void Environment::addLight(const Light& light) { lights_.push_back(light); }
+
+void Environment::addStroke(const Stroke& stroke) {
+  strokes_.push_back(stroke);
+  dirty_ = true;
+}
+
+void Environment::setStrokes(std::vector<Stroke> strokes) {
+  strokes_ = std::move(strokes);
+  dirty_ = true;
+}
+
+void Environment::commit() {
+  if (!dirty_ && scene_) return;
+  RTCDevice device = embreeDevice();
+  if (!scene_) {
+    RTCScene scene = rtcNewScene(device);
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+    scene_ = scene;
+  }
+  RTCScene scene = static_cast<RTCScene>(scene_);
+  for (size_t id = 0; id < obstacles_.size(); ++id) {
+    ObstacleData& o = *obstacles_[id];
+    if (!o.geometry) {
+      o.geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      rtcSetSharedGeometryBuffer(o.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, o.world.data(), 0,
+                                 sizeof(Vec3), o.world.size() - 1);
+      rtcSetSharedGeometryBuffer(o.geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, o.welded.indices.data(), 0,
+                                 3 * sizeof(uint32_t), o.welded.indices.size() / 3);
+      rtcCommitGeometry(o.geometry);
+      rtcAttachGeometryByID(scene, o.geometry, static_cast<unsigned>(id));
+      o.moved = false;
+    } else if (o.moved) {
+      // The world vertex array may have been reallocated by updateWorld(): re-point the buffer.
+      rtcSetSharedGeometryBuffer(o.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, o.world.data(), 0,
+                                 sizeof(Vec3), o.world.size() - 1);
+      rtcUpdateGeometryBuffer(o.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+      rtcCommitGeometry(o.geometry);
+      o.moved = false;
+    }
+  }
+  rtcCommitScene(scene);
+
+  // Stroke lookup grid.
+  StrokeGrid& g = *strokeGrid_;
+  g = StrokeGrid();
+  float maxRadius = 0.0f;
+  for (const Stroke& s : strokes_) maxRadius = std::max(maxRadius, s.radius);
+  g.cell = std::max(maxRadius, 1e-3f);
+  for (uint32_t si = 0; si < strokes_.size(); ++si)
+    for (const Vec3& p : strokes_[si].points) {
+      Eigen::Vector3i c = g.cellOf(p);
+      g.cells[StrokeGrid::key(c.x(), c.y(), c.z())].push_back(static_cast<uint32_t>(g.points.size()));
+      g.points.push_back(p);
+      g.stroke.push_back(si);
+    }
+  dirty_ = false;
+}
+
+std::optional<RayHit> Environment::rayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
+  assert(!dirty_ && "Environment::commit() must be called after edits");
+  if (obstacles_.empty()) return std::nullopt;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRayHit rh;
+  rh.ray.org_x = origin.x();
+  rh.ray.org_y = origin.y();
+  rh.ray.org_z = origin.z();
+  rh.ray.dir_x = dir.x();
+  rh.ray.dir_y = dir.y();
+  rh.ray.dir_z = dir.z();
+  rh.ray.tnear = tMin;
+  rh.ray.tfar = tMax;
+  rh.ray.time = 0.0f;
+  rh.ray.mask = 0xffffffffu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(static_cast<RTCScene>(scene_), &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  const ObstacleData& o = *obstacles_[rh.hit.geomID];
+  RayHit hit;
+  hit.t = rh.ray.tfar;
+  hit.point = origin + hit.t * dir;
+  hit.normal = o.faceNormalWorld[rh.hit.primID];
+  hit.obstacle = rh.hit.geomID;
+  hit.triangle = rh.hit.primID;
+  return hit;
+}
+
+bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
+  assert(!dirty_ && "Environment::commit() must be called after edits");
+  if (obstacles_.empty()) return false;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  RTCRay ray;
+  ray.org_x = origin.x();
+  ray.org_y = origin.y();
+  ray.org_z = origin.z();
+  ray.dir_x = dir.x();
+  ray.dir_y = dir.y();
+  ray.dir_z = dir.z();
+  ray.tnear = tMin;
+  ray.tfar = tMax;
+  ray.time = 0.0f;
+  ray.mask = 0xffffffffu;
+  ray.id = 0;
+  ray.flags = 0;
+  rtcOccluded1(static_cast<RTCScene>(scene_), &ctx, &ray);
+  return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
+}
+
+size_t Environment::countSegmentHits(const Vec3& a, const Vec3& b) const {
+  Vec3 d = b - a;
+  float len = d.norm();
+  if (!(len > 0.0f)) return 0;
+  d /= len;
+  size_t hits = 0;
+  float t = 0.0f;
+  while (auto h = rayCast(a, d, len, t)) {
+    ++hits;
+    // Step past this hit; a relative epsilon keeps a hit on a shared edge from counting twice.
+    t = h->t + std::max(1e-6f, h->t * 1e-6f);
+    if (hits > 1000) break;
+  }
+  return hits;
+}
+
+std::optional<SurfacePoint> Environment::closestPoint(const Vec3& p, float radius) const {
+  assert(!dirty_ && "Environment::commit() must be called after edits");
+  if (obstacles_.empty()) return std::nullopt;
+  // Geometry ids equal obstacle indices, so small per-call tables suffice.
+  constexpr size_t kStack = 16;
+  const Vec3* vStack[kStack];
+  const uint32_t* iStack[kStack];
+  std::vector<const Vec3*> vHeap;
+  std::vector<const uint32_t*> iHeap;
+  const Vec3** verts = vStack;
+  const uint32_t** inds = iStack;
+  if (obstacles_.size() > kStack) {
+    vHeap.resize(obstacles_.size());
+    iHeap.resize(obstacles_.size());
+    verts = vHeap.data();
+    inds = iHeap.data();
+  }
+  for (size_t i = 0; i < obstacles_.size(); ++i) {
+    verts[i] = obstacles_[i]->world.data();
+    inds[i] = obstacles_[i]->welded.indices.data();
+  }
+  ClosestSearch s{verts, inds, p, radius * radius};
+  runClosest(static_cast<RTCScene>(scene_), s, radius);
+  if (s.bestGeom == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  const ObstacleData& o = *obstacles_[s.bestGeom];
+  SurfacePoint sp;
+  sp.point = s.bestPoint;
+  sp.distance = std::sqrt(s.bestDist2);
+  sp.normal = o.faceNormalWorld[s.bestPrim];
+  sp.obstacle = s.bestGeom;
+  sp.triangle = s.bestPrim;
+  Vec3 away = p - s.bestPoint;
+  float len = away.norm();
+  if (len > 1e-7f) {
+    sp.away = away / len;
+  } else if (o.info.closed) {
+    const uint32_t* tri = &o.welded.indices[3 * size_t(s.bestPrim)];
+    sp.away = o.info.worldFromLocal.applyVector(o.normals.at(s.bestPrim, s.bestFeature, tri));
+  } else {
+    sp.away = sp.normal;
+  }
+  return sp;
+}
+
+float Environment::exactSignedDistance(const Vec3& p, float maxDistance) const {
+  std::optional<SurfacePoint> sp = closestPoint(p, maxDistance);
+  if (!sp) return maxDistance;
+  const ObstacleData& o = *obstacles_[sp->obstacle];
+  if (!o.info.closed || sp->distance == 0.0f) return sp->distance;
+  // Recover the closest feature to pick the right pseudonormal.
+  const uint32_t* tri = &o.welded.indices[3 * size_t(sp->triangle)];
+  ClosestOnTriangle c = closestPointOnTriangle(p, o.world[tri[0]], o.world[tri[1]], o.world[tri[2]]);
+  Vec3 n = o.info.worldFromLocal.applyVector(o.normals.at(sp->triangle, c.feature, tri));
+  return (p - sp->point).dot(n) < 0.0f ? -sp->distance : sp->distance;
+}
+
+void Environment::buildSdf(ObstacleData& o) const {
+  Bounds3 lb = o.info.localBounds;
+  float longest = lb.size().maxCoeff();
+  float cell = o.sdfCell > 0.0f ? o.sdfCell : std::clamp(longest / 64.0f, 0.01f, 0.05f);
+  // Keep the grid under ~16M samples whatever the obstacle size.
+  for (;;) {
+    Vec3 n = (lb.size() / cell).array() + 9.0f;
+    if (double(n.x()) * n.y() * n.z() <= 16.0e6) break;
+    cell *= 1.25f;
+  }
+  Bounds3 grid = lb;
+  grid.min -= Vec3::Constant(4.0f * cell);
+  grid.max += Vec3::Constant(4.0f * cell);
+
+  // A local-frame BVH of this obstacle alone.
+  RTCDevice device = embreeDevice();
+  RTCScene scene = rtcNewScene(device);
+  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+  std::vector<Vec3> local = o.welded.positions;
+  local.push_back(Vec3::Zero());  // Embree reads 16 bytes past the last vertex
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, local.data(), 0, sizeof(Vec3),
+                             local.size() - 1);
+  rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, o.welded.indices.data(), 0,
+                             3 * sizeof(uint32_t), o.welded.indices.size() / 3);
+  rtcCommitGeometry(geom);
+  rtcAttachGeometryByID(scene, geom, 0);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(scene);
+
+  const Vec3* verts[1] = {local.data()};
+  const uint32_t* inds[1] = {o.welded.indices.data()};
+  o.sdf = SdfGrid(grid, cell, [&](const Vec3& p) {
+    ClosestSearch s{verts, inds, p, kInf};
+    runClosest(scene, s, kInf);
+    float d = std::sqrt(s.bestDist2);
+    if (o.info.closed && d > 0.0f) {
+      const uint32_t* tri = &o.welded.indices[3 * size_t(s.bestPrim)];
+      if ((p - s.bestPoint).dot(o.normals.at(s.bestPrim, s.bestFeature, tri)) < 0.0f) d = -d;
+    }
+    return d;
+  });
+  rtcReleaseScene(scene);
+}
+
+float Environment::obstacleSdf(const ObstacleData& o, const Vec3& worldP, Vec3* gradient) const {
+  std::call_once(o.sdfOnce, [&] { buildSdf(const_cast<ObstacleData&>(o)); });
+  Vec3 local = o.info.worldFromLocal.inverse().applyPoint(worldP);
+  if (gradient) *gradient = o.info.worldFromLocal.applyVector(o.sdf.gradient(local));
+  return o.sdf.sample(local);
+}
+
+float Environment::signedDistance(const Vec3& p) const { return signedDistance(p, nullptr); }
+
+float Environment::signedDistance(const Vec3& p, Vec3* gradient) const {
+  float best = kInf;
+  if (gradient) *gradient = Vec3::Zero();
+  for (const auto& o : obstacles_) {
+    // Skip obstacles whose bounds are already farther than the best distance.
+    const Bounds3& b = o->info.worldBounds;
+    Vec3 outside = (b.min - p).cwiseMax(p - b.max).cwiseMax(Vec3::Zero());
+    if (outside.norm() > best) continue;
+    Vec3 g;
+    float d = obstacleSdf(*o, p, gradient ? &g : nullptr);
+    if (d < best) {
+      best = d;
+      if (gradient) *gradient = g;
+    }
+  }
+  return best;
+}
+
+LightSample Environment::light(const Vec3& p) const {
+  LightSample out;
+  float total = 0.0f, visible = 0.0f;
+  Vec3 dir = Vec3::Zero();
+  for (const Light& l : lights_) {
+    if (l.intensity <= 0.0f) continue;
+    Vec3 toLight;
+    float tMax = kInf;
+    if (l.type == Light::Type::Directional) {
+      toLight = -l.direction.normalized();
+    } else {
+      toLight = l.position - p;
+      tMax = toLight.norm();
+      if (!(tMax > 0.0f)) continue;
+      toLight /= tMax;
+    }
+    int n = (l.angularRadius > 0.0f) ? std::max(1, l.samples) : 1;
+    int unblocked = 0;
+    for (int i = 0; i < n; ++i) {
+      Vec3 d = coneSample(toLight, l.angularRadius, i, n);
+      if (!occluded(p, d, tMax, 1e-4f)) ++unblocked;
+    }
+    float v = float(unblocked) / float(n);
+    total += l.intensity;
+    visible += l.intensity * v;
+    dir += l.intensity * v * toLight;
+  }
+  if (total > 0.0f) out.exposure = visible / total;
+  float len = dir.norm();
+  if (len > 0.0f) out.direction = dir / len;
+  return out;
+}
+
+Vec3 Environment::attraction(const Vec3& p) const {
+  const StrokeGrid& g = *strokeGrid_;
+  if (g.points.empty()) return Vec3::Zero();
+  Eigen::Vector3i c = g.cellOf(p);
+  Vec3 sum = Vec3::Zero();
+  float weightSum = 0.0f, maxWeight = 0.0f;
+  for (int dz = -1; dz <= 1; ++dz)
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        auto it = g.cells.find(StrokeGrid::key(c.x() + dx, c.y() + dy, c.z() + dz));
+        if (it == g.cells.end()) continue;
+        for (uint32_t i : it->second) {
+          const Stroke& s = strokes_[g.stroke[i]];
+          Vec3 d = g.points[i] - p;
+          float dist = d.norm();
+          if (dist >= s.radius || dist < 1e-6f) continue;
+          float w = (1.0f - dist / s.radius);
+          w *= w;
+          sum += w * (s.attract ? s.strength : -s.strength) * (d / dist);
+          weightSum += w;
+          maxWeight = std::max(maxWeight, w);
+        }
+      }
+  if (weightSum <= 0.0f) return Vec3::Zero();
+  return sum / weightSum * maxWeight;
+}
+
+Vec3 Environment::wind(const Vec3&, float) const { return wind_; }
+
+Bounds3 Environment::bounds() const {
+  Bounds3 b;
+  for (const auto& o : obstacles_) b.extend(o->info.worldBounds);
+  return b;
+}
+
+}  // namespace tendril::env

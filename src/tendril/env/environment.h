@@ -1,0 +1,160 @@
+// The Environment answers geometric questions about a scene and nothing else: ray casts,
+// closest surface point, signed distance, light exposure, attraction from painted strokes and
+// wind velocity. Growth models ask; they never look inside meshes themselves.
+//
+// Obstacles are triangle meshes in their own frame plus a rigid worldFromLocal transform that
+// may change between steps (setObstacleTransform + commit). Ray and closest-point queries run
+// on one Embree BVH over all obstacles in world space; signed distances come from a per-
+// obstacle grid in local space (built on first use), so moving an obstacle never rebuilds it.
+//
+// Queries are const and thread-safe after commit(); edits and commit() are not.
+#pragma once
+
+#include "tendril/core/math.h"
+#include "tendril/core/triangle_mesh.h"
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tendril::env {
+
+enum class ObstacleKind { Plane, Box, Sphere, Cylinder, Wall, Mesh };
+
+struct ObstacleDef {
+  std::string name;
+  ObstacleKind kind = ObstacleKind::Mesh;
+  std::string source;  // where it came from (file path, or the scene file), for messages
+  TriangleMesh mesh;   // local frame, any scale already applied
+  RigidTransform worldFromLocal;
+  // Signed-distance grid cell edge (m); 0 = automatic: longest side / 64, clamped to [1, 5] cm.
+  float sdfCell = 0.0f;
+  Vec3 color = Vec3(0.6f, 0.6f, 0.6f);  // linear RGB, for rendering and preview export
+};
+
+struct ObstacleInfo {
+  std::string name;
+  ObstacleKind kind;
+  std::string source;
+  RigidTransform worldFromLocal;
+  Vec3 color;
+  bool closed = false;       // watertight, manifold, consistently wound: distances are signed
+  size_t triangles = 0;
+  Bounds3 localBounds;
+  Bounds3 worldBounds;
+};
+
+struct RayHit {
+  float t = 0.0f;
+  Vec3 point = Vec3::Zero();
+  Vec3 normal = Vec3::Zero();  // unit face normal (outward for closed obstacles)
+  uint32_t obstacle = 0;
+  uint32_t triangle = 0;
+};
+
+struct SurfacePoint {
+  Vec3 point = Vec3::Zero();   // closest point on any obstacle
+  Vec3 normal = Vec3::Zero();  // unit normal of the closest triangle (outward if closed)
+  Vec3 away = Vec3::Zero();    // unit direction from `point` to the query (normal if they coincide)
+  float distance = 0.0f;
+  uint32_t obstacle = 0;
+  uint32_t triangle = 0;
+};
+
+struct Light {
+  enum class Type { Directional, Point };
+  Type type = Type::Directional;
+  Vec3 direction = Vec3(0, -1, 0);  // Directional: the direction the light travels (unit)
+  Vec3 position = Vec3::Zero();     // Point
+  float intensity = 1.0f;           // relative weight among lights
+  float angularRadius = 0.0f;       // soft shadows: cone half-angle of the light (rad)
+  int samples = 1;                  // shadow rays per query when angularRadius > 0
+};
+
+struct LightSample {
+  float exposure = 0.0f;           // in [0, 1]: 1 − occlusion, intensity-weighted over lights
+  Vec3 direction = Vec3::Zero();   // unit direction toward the visible light (zero if none)
+};
+
+// A painted stroke: points on surfaces that attract (or repel) growth within `radius`.
+struct Stroke {
+  bool attract = true;
+  float radius = 0.3f;    // m
+  float strength = 1.0f;  // >= 0
+  std::vector<Vec3> points;
+};
+
+class Environment {
+ public:
+  Environment();
+  ~Environment();
+  Environment(const Environment&) = delete;
+  Environment& operator=(const Environment&) = delete;
+
+  // Adds an obstacle; warns (log) when the mesh is open, in which case its distances are
+  // unsigned. Returns its id. Takes effect at the next commit().
+  uint32_t addObstacle(ObstacleDef def);
+  void setObstacleTransform(uint32_t id, const RigidTransform& worldFromLocal);
+  size_t obstacleCount() const;
+  const ObstacleInfo& obstacle(uint32_t id) const;
+  // The obstacle's mesh in its local frame (welded).
+  TriangleMesh obstacleMesh(uint32_t id) const;
+
+  void addLight(const Light& light);
+  const std::vector<Light>& lights() const { return lights_; }
+  void setLights(std::vector<Light> lights) { lights_ = std::move(lights); }
+
+  void addStroke(const Stroke& stroke);
+  const std::vector<Stroke>& strokes() const { return strokes_; }
+  void setStrokes(std::vector<Stroke> strokes);
+
+  void setWind(const Vec3& velocity) { wind_ = velocity; }
+
+  // Rebuilds the BVH (and stroke lookup) after edits. Cheap when nothing changed.
+  void commit();
+
+  // First hit along origin + t·dir for t in [tMin, tMax] (dir unit length).
+  std::optional<RayHit> rayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin = 0.0f) const;
+  bool occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin = 0.0f) const;
+  // Number of surface crossings on the segment a-b (0 = the segment touches no obstacle).
+  size_t countSegmentHits(const Vec3& a, const Vec3& b) const;
+  // Closest obstacle surface point within `radius` of p (Embree point query).
+  std::optional<SurfacePoint> closestPoint(const Vec3& p, float radius) const;
+  // Exact signed distance (negative inside closed obstacles) from the closest point and the
+  // angle-weighted pseudonormal; +maxDistance when nothing is that close.
+  float exactSignedDistance(const Vec3& p, float maxDistance) const;
+  // Signed distance from the obstacles' SDF grids (trilinear), min over obstacles.
+  float signedDistance(const Vec3& p) const;
+  // signedDistance and its unit gradient (pointing away from the nearest obstacle).
+  float signedDistance(const Vec3& p, Vec3* gradient) const;
+  // Light exposure and direction at p (shadow rays against obstacles only).
+  LightSample light(const Vec3& p) const;
+  // Pull toward painted strokes: the weighted average of ±strength·(unit direction to each
+  // stroke point within its radius), weights (1 − d/r)², scaled by the largest weight.
+  // Zero when no stroke is near.
+  Vec3 attraction(const Vec3& p) const;
+  // Wind velocity (m/s) at p and time t. Constant field for now.
+  Vec3 wind(const Vec3& p, float t) const;
+
+  Bounds3 bounds() const;
+
+ private:
+  struct ObstacleData;
+  struct StrokeGrid;
+  void buildSdf(ObstacleData& o) const;
+  float obstacleSdf(const ObstacleData& o, const Vec3& worldP, Vec3* gradient) const;
+
+  std::vector<std::unique_ptr<ObstacleData>> obstacles_;
+  std::vector<Light> lights_;
+  std::vector<Stroke> strokes_;
+  std::unique_ptr<StrokeGrid> strokeGrid_;
+  Vec3 wind_ = Vec3::Zero();
+  void* scene_ = nullptr;  // RTCScene
+  bool dirty_ = true;
+};
+
+const char* obstacleKindName(ObstacleKind kind);
+
+}  // namespace tendril::env

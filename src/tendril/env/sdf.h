@@ -1,0 +1,43 @@
+// A signed distance field sampled on a regular grid in an obstacle's local frame, read back
+// with trilinear interpolation (seed 000 §5.2 gives every obstacle one; its future-work note in
+// seed 003 suggests the same for climbing queries).
+#pragma once
+
+#include "tendril/core/math.h"
+
+#include <Eigen/Core>
+#include <functional>
+#include <vector>
+
+namespace tendril::env {
+
+class SdfGrid {
+ public:
+  SdfGrid() = default;
+  // Samples `distance` at every grid point of a grid covering `bounds` with cubic cells of
+  // edge `cell` (in parallel; each value depends only on its point).
+  SdfGrid(const Bounds3& bounds, float cell, const std::function<float(const Vec3&)>& distance);
+
+  bool empty() const { return values_.empty(); }
+  float cell() const { return cell_; }
+  const Eigen::Vector3i& dims() const { return dims_; }
+  Bounds3 bounds() const;
+
+  // Trilinear distance. Outside the grid: the value at the nearest grid point plus the
+  // distance to the grid (an upper bound that grows correctly away from the obstacle).
+  float sample(const Vec3& p) const;
+  // Unit gradient of the trilinear field by central differences (points away from the
+  // surface outside a closed obstacle). Zero where the field is flat.
+  Vec3 gradient(const Vec3& p) const;
+
+ private:
+  float at(int x, int y, int z) const { return values_[(static_cast<size_t>(z) * dims_.y() + y) * dims_.x() + x]; }
+  float trilinear(const Vec3& p) const;
+
+  Vec3 origin_ = Vec3::Zero();
+  float cell_ = 1.0f;
+  Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
+  std::vector<float> values_;
+};
+
+}  // namespace tendril::env

@@ -1,0 +1,201 @@
+#include "tendril/env/environment.h"
+
+#include "tendril/core/random.h"
+#include "tendril/env/primitives.h"
+#include "tendril/env/topology.h"
+
+#include <gtest/gtest.h>
+
+namespace tendril::env {
+namespace {
+
+ObstacleDef def(const char* name, TriangleMesh mesh, RigidTransform t = {}) {
+  ObstacleDef d;
+  d.name = name;
+  d.mesh = std::move(mesh);
+  d.worldFromLocal = t;
+  return d;
+}
+
+// Brute-force closest distance over every triangle, for checking the BVH query.
+float bruteDistance(const Environment& env, const Vec3& p) {
+  float best = 1e30f;
+  for (uint32_t id = 0; id < env.obstacleCount(); ++id) {
+    TriangleMesh m = env.obstacleMesh(id);
+    const RigidTransform& t = env.obstacle(id).worldFromLocal;
+    for (size_t i = 0; i < m.indices.size(); i += 3) {
+      auto c = closestPointOnTriangle(p, t.applyPoint(m.positions[m.indices[i]]),
+                                      t.applyPoint(m.positions[m.indices[i + 1]]),
+                                      t.applyPoint(m.positions[m.indices[i + 2]]));
+      best = std::min(best, (c.point - p).norm());
+    }
+  }
+  return best;
+}
+
+TEST(Environment, RayCastHitsBoxFaceWithOutwardNormal) {
+  Environment env;
+  env.addObstacle(def("box", makeBox(Vec3(1, 1, 1)), {Quat::Identity(), Vec3(0, 0, 5)}));
+  env.commit();
+  auto hit = env.rayCast(Vec3(0, 0, 0), Vec3(0, 0, 1), 100.0f);
+  ASSERT_TRUE(hit);
+  EXPECT_NEAR(hit->t, 4.5f, 1e-5f);
+  EXPECT_TRUE(hit->normal.isApprox(Vec3(0, 0, -1), 1e-5f));
+  EXPECT_FALSE(env.rayCast(Vec3(0, 0, 0), Vec3(0, 0, -1), 100.0f));
+  EXPECT_FALSE(env.rayCast(Vec3(0, 0, 0), Vec3(0, 0, 1), 4.0f));
+  EXPECT_EQ(env.countSegmentHits(Vec3(0, 0, 0), Vec3(0, 0, 10)), 2u);
+  EXPECT_EQ(env.countSegmentHits(Vec3(0, 0, 0), Vec3(0, 0, 5)), 1u);
+  EXPECT_EQ(env.countSegmentHits(Vec3(0, 0, 0), Vec3(0, 0, 4)), 0u);
+}
+
+TEST(Environment, ClosestPointMatchesBruteForce) {
+  Environment env;
+  env.addObstacle(def("sphere", makeSphere(0.7f, 3), {axisAngle(Vec3(1, 2, 3), 0.4f), Vec3(1, 0.5f, 0)}));
+  env.addObstacle(def("wall", makeWall(Vec3(3, 2, 0.2f), {{Vec2(0, 1), Vec2(0.8f, 0.6f)}}),
+                      {Quat::Identity(), Vec3(0, 0, -1)}));
+  env.commit();
+  Rng rng(RandomKey{11});
+  for (int i = 0; i < 500; ++i) {
+    Vec3 p(rng.uniform(-2, 2), rng.uniform(-0.5f, 2.5f), rng.uniform(-2, 2));
+    float brute = bruteDistance(env, p);
+    auto sp = env.closestPoint(p, 10.0f);
+    ASSERT_TRUE(sp);
+    ASSERT_NEAR(sp->distance, brute, 1e-4f) << "at " << p.transpose();
+    ASSERT_NEAR((sp->point - p).norm(), sp->distance, 1e-4f);
+    ASSERT_NEAR(sp->away.norm(), 1.0f, 1e-4f);
+    // Within a smaller radius the answer exists exactly when the surface is that close.
+    EXPECT_EQ(env.closestPoint(p, 0.3f).has_value(), brute <= 0.3f);
+  }
+}
+
+TEST(Environment, ExactSignedDistanceIsNegativeInsideOnly) {
+  Environment env;
+  env.addObstacle(def("box", makeBox(Vec3(1, 1, 1))));
+  env.commit();
+  EXPECT_NEAR(env.exactSignedDistance(Vec3(0, 0, 0), 5), -0.5f, 1e-5f);
+  EXPECT_NEAR(env.exactSignedDistance(Vec3(0.4f, 0.45f, 0.1f), 5), -0.05f, 1e-5f);
+  EXPECT_NEAR(env.exactSignedDistance(Vec3(1, 0, 0), 5), 0.5f, 1e-5f);
+  // Near a corner the closest feature is a vertex or edge: pseudonormals still give the sign.
+  EXPECT_GT(env.exactSignedDistance(Vec3(0.6f, 0.6f, 0.6f), 5), 0.0f);
+  EXPECT_LT(env.exactSignedDistance(Vec3(0.49f, 0.49f, 0.49f), 5), 0.0f);
+}
+
+TEST(Environment, SdfGridAgreesWithExactDistance) {
+  Environment env;
+  ObstacleDef d = def("sphere", makeSphere(0.5f, 4), {Quat::Identity(), Vec3(0, 1, 0)});
+  d.sdfCell = 0.02f;
+  env.addObstacle(std::move(d));
+  env.addObstacle(def("wall", makeWall(Vec3(2, 2, 0.25f), {{Vec2(0, 1), Vec2(0.6f, 0.6f)}}),
+                      {Quat::Identity(), Vec3(0, 0, -1.5f)}));
+  env.commit();
+  Rng rng(RandomKey{5});
+  for (int i = 0; i < 400; ++i) {
+    Vec3 p(rng.uniform(-1.2f, 1.2f), rng.uniform(-0.2f, 2.2f), rng.uniform(-2, 1));
+    float exact = env.exactSignedDistance(p, 10.0f);
+    Vec3 g;
+    float grid = env.signedDistance(p, &g);
+    // Near surfaces (where collisions happen) the trilinear error is below a couple of cells;
+    // farther out, beyond the grids, the value is an upper bound that keeps the right sign.
+    if (std::abs(exact) < 0.3f) {
+      ASSERT_NEAR(grid, exact, 0.05f) << p.transpose();
+    } else {
+      ASSERT_GE(grid, exact - 0.05f) << p.transpose();
+    }
+    if (std::abs(exact) > 0.1f) {
+      ASSERT_EQ(grid < 0, exact < 0) << p.transpose();
+    }
+  }
+  // Inside the sphere the distance is negative and the gradient points outward.
+  Vec3 g;
+  EXPECT_LT(env.signedDistance(Vec3(0.2f, 1, 0), &g), -0.2f);
+  EXPECT_GT(g.x(), 0.9f);
+}
+
+TEST(Environment, MovingAnObstacleMovesEveryQuery) {
+  Environment env;
+  uint32_t id = env.addObstacle(def("box", makeBox(Vec3(1, 1, 1))));
+  env.commit();
+  EXPECT_LT(env.signedDistance(Vec3(0, 0, 0)), 0.0f);
+  env.setObstacleTransform(id, {axisAngle(Vec3::UnitY(), 0.3f), Vec3(3, 0, 0)});
+  env.commit();
+  EXPECT_GT(env.signedDistance(Vec3(0, 0, 0)), 2.0f);
+  EXPECT_LT(env.signedDistance(Vec3(3, 0, 0)), -0.4f);
+  auto hit = env.rayCast(Vec3(0, 0, 0), Vec3(1, 0, 0), 10);
+  ASSERT_TRUE(hit);
+  EXPECT_GT(hit->t, 2.3f);
+  EXPECT_NEAR(env.closestPoint(Vec3(3, 2, 0), 5)->distance, 1.5f, 1e-4f);
+}
+
+TEST(Environment, OpenMeshGivesUnsignedDistance) {
+  Environment env;
+  TriangleMesh m = makeBox(Vec3(1, 1, 1));
+  m.indices.resize(m.indices.size() - 6);
+  env.addObstacle(def("open", m));
+  env.commit();
+  EXPECT_FALSE(env.obstacle(0).closed);
+  EXPECT_GT(env.exactSignedDistance(Vec3(0, 0, 0), 5), 0.0f);
+  EXPECT_GT(env.signedDistance(Vec3(0, 0, 0)), 0.0f);
+}
+
+TEST(Environment, LightExposureFollowsShadows) {
+  Environment env;
+  env.addObstacle(def("roof", makeBox(Vec3(2, 0.1f, 2)), {Quat::Identity(), Vec3(0, 2, 0)}));
+  Light sun;
+  sun.direction = Vec3(0, -1, 0);
+  env.addLight(sun);
+  env.commit();
+  LightSample under = env.light(Vec3(0, 0, 0));
+  LightSample open = env.light(Vec3(5, 0, 0));
+  EXPECT_EQ(under.exposure, 0.0f);
+  EXPECT_EQ(under.direction, Vec3::Zero());
+  EXPECT_EQ(open.exposure, 1.0f);
+  EXPECT_TRUE(open.direction.isApprox(Vec3(0, 1, 0)));
+  // A second, unblocked point light of equal intensity gives half exposure under the roof.
+  Light lamp;
+  lamp.type = Light::Type::Point;
+  lamp.position = Vec3(5, 0.5f, 0);
+  env.addLight(lamp);
+  LightSample both = env.light(Vec3(0, 0, 0));
+  EXPECT_NEAR(both.exposure, 0.5f, 1e-6f);
+  EXPECT_GT(both.direction.x(), 0.9f);
+}
+
+TEST(Environment, SoftShadowsGiveFractionalExposure) {
+  Environment env;
+  env.addObstacle(def("edge", makeBox(Vec3(2, 0.1f, 4)), {Quat::Identity(), Vec3(-1, 2, 0)}));
+  Light sun;
+  sun.direction = Vec3(0, -1, 0);
+  sun.angularRadius = radians(10);
+  sun.samples = 64;
+  env.addLight(sun);
+  env.commit();
+  float e = env.light(Vec3(0, 0, 0)).exposure;  // right under the roof's edge
+  EXPECT_GT(e, 0.3f);
+  EXPECT_LT(e, 0.7f);
+}
+
+TEST(Environment, StrokesAttractAndRepel) {
+  Environment env;
+  Stroke s;
+  s.radius = 0.5f;
+  s.strength = 2.0f;
+  s.points = {Vec3(1, 0, 0), Vec3(1, 0.1f, 0)};
+  env.addStroke(s);
+  Stroke r;
+  r.attract = false;
+  r.radius = 0.3f;
+  r.points = {Vec3(-1, 0, 0)};
+  env.addStroke(r);
+  env.commit();
+  Vec3 a = env.attraction(Vec3(0.8f, 0, 0));
+  EXPECT_GT(a.x(), 0.0f);
+  EXPECT_LE(a.norm(), 2.0f);
+  Vec3 b = env.attraction(Vec3(-0.9f, 0, 0));
+  EXPECT_GT(b.x(), 0.0f);  // pushed away from the repulsor at x = -1
+  EXPECT_EQ(env.attraction(Vec3(0, 0, 0)), Vec3::Zero());
+  // Closer means stronger.
+  EXPECT_GT(env.attraction(Vec3(0.9f, 0, 0)).norm(), env.attraction(Vec3(0.6f, 0, 0)).norm());
+}
+
+}  // namespace
+}  // namespace tendril::env
