@@ -1,0 +1,29 @@
+// PlantModel → triangle meshes: the bark sweep, leaf quads grouped by shape and the primitive
+// meshes, all in world space. The one call apps and exporters use; the pieces live in
+// branch_sweep.h, leaf_mesh.h and primitive_mesh.h.
+#pragma once
+
+#include "tendril/core/triangle_mesh.h"
+#include "tendril/mesh/branch_sweep.h"
+#include "tendril/mesh/leaf_mesh.h"
+#include "tendril/mesh/mesh_options.h"
+#include "tendril/mesh/primitive_mesh.h"
+#include "tendril/plant/plant_model.h"
+
+#include <vector>
+
+namespace tendril::mesh {
+
+struct PlantMesh {
+  TriangleMesh bark;                       // every branch chain of the skeleton
+  std::vector<TriangleMesh> leaves;        // index = leaf shape id (leafShapeCount() entries)
+  std::vector<PrimitiveGroup> primitives;  // one per material
+
+  size_t triangleCount() const;
+};
+
+// Validates the plant (Error naming it on bad data) and the options, then meshes it. Bark and
+// leaves are built in parallel; the result is bit-identical for any thread count.
+PlantMesh buildPlantMesh(const plant::PlantModel& plant, const MeshOptions& options = {});
+
+}  // namespace tendril::mesh
