@@ -1,0 +1,157 @@
+#include "tendril/io/export_model.h"
+
+#include "tendril/core/error.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace tendril::io {
+namespace {
+
+using Kind = ExportMaterial::Kind;
+
+Vec4 clampedColor(const Vec3& rgb) {
+  Vec3 c = rgb.cwiseMax(0.0f).cwiseMin(1.0f);
+  return Vec4(c.x(), c.y(), c.z(), 1.0f);
+}
+
+float clamp01(float v) { return std::min(1.0f, std::max(0.0f, v)); }
+
+// A readable name for a texture spec: "ivy-0" for builtin:ivy-0, the file's stem otherwise.
+std::string textureLabel(const std::string& spec) {
+  if (isBuiltinTexture(spec)) return spec.substr(kBuiltinPrefix.size());
+  return std::filesystem::path(spec).stem().string();
+}
+
+class ModelBuilder {
+ public:
+  explicit ModelBuilder(ExportModel& model) : model_(model) {}
+
+  int texture(const std::string& spec, bool repeat) {
+    int image = -1;
+    for (size_t i = 0; i < model_.images.size(); ++i)
+      if (model_.images[i].spec == spec) image = static_cast<int>(i);
+    if (image < 0) {
+      model_.images.push_back({spec, loadEncodedTexture(spec)});
+      image = static_cast<int>(model_.images.size() - 1);
+    }
+    for (size_t t = 0; t < model_.textures.size(); ++t)
+      if (model_.textures[t].image == image && model_.textures[t].repeat == repeat) return static_cast<int>(t);
+    model_.textures.push_back({image, repeat});
+    return static_cast<int>(model_.textures.size() - 1);
+  }
+
+  // The index of an equal material, or of `m` added under a unique version of its name.
+  int material(ExportMaterial m) {
+    for (size_t i = 0; i < model_.materials.size(); ++i) {
+      const ExportMaterial& o = model_.materials[i];
+      if (o.kind == m.kind && o.texture == m.texture && o.baseColor == m.baseColor && o.roughness == m.roughness &&
+          o.metallic == m.metallic && o.alphaMask == m.alphaMask && o.doubleSided == m.doubleSided)
+        return static_cast<int>(i);
+    }
+    std::string base = m.name;
+    for (int k = 2; nameTaken(m.name); ++k) m.name = fmt::format("{}-{}", base, k);
+    model_.materials.push_back(std::move(m));
+    return static_cast<int>(model_.materials.size() - 1);
+  }
+
+ private:
+  bool nameTaken(const std::string& name) const {
+    return std::any_of(model_.materials.begin(), model_.materials.end(),
+                       [&](const ExportMaterial& o) { return o.name == name; });
+  }
+  ExportModel& model_;
+};
+
+// Obstacles and other extra meshes: checked, with unit normals.
+TriangleMesh preparedMesh(const NamedMesh& named) {
+  const TriangleMesh& m = named.mesh;
+  auto bad = [&](const std::string& what) { return Error(fmt::format("mesh \"{}\"", named.name), "", what); };
+  if (m.indices.size() % 3 != 0) throw bad("index count is not a multiple of 3");
+  for (uint32_t i : m.indices)
+    if (i >= m.positions.size()) throw bad("index out of range");
+  for (const Vec3& p : m.positions)
+    if (!isFinite(p)) throw bad("position is not finite");
+  if (!m.normals.empty() && m.normals.size() != m.positions.size()) throw bad("normal count differs from vertex count");
+  if (!m.uvs.empty() && m.uvs.size() != m.positions.size()) throw bad("uv count differs from vertex count");
+  TriangleMesh out = m;
+  bool unitNormals = !out.normals.empty() && std::all_of(out.normals.begin(), out.normals.end(), [](const Vec3& n) {
+    return std::abs(n.squaredNorm() - 1.0f) < 1e-3f;
+  });
+  if (!unitNormals) out.computeNormals();
+  return out;
+}
+
+}  // namespace
+
+ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& options) {
+  ExportModel model;
+  model.plantMeshes.reserve(scene.plants.size());
+  for (const plant::PlantModel& p : scene.plants) model.plantMeshes.push_back(mesh::buildPlantMesh(p, options.mesh));
+  model.extraMeshes.reserve(scene.meshes.size());
+  for (const NamedMesh& m : scene.meshes) model.extraMeshes.push_back(preparedMesh(m));
+
+  // Materials and textures are created when a non-empty part needs them, so that nothing in
+  // the file is unused.
+  ModelBuilder builder(model);
+  for (size_t i = 0; i < scene.plants.size(); ++i) {
+    const plant::PlantModel& p = scene.plants[i];
+    const mesh::PlantMesh& pm = model.plantMeshes[i];
+    ExportObject object;
+    object.name = p.name.empty() ? fmt::format("plant-{}", i) : p.name;
+    if (!pm.bark.empty()) {
+      ExportMaterial m;
+      m.kind = Kind::Bark;
+      m.name = "bark";
+      m.roughness = clamp01(p.bark.roughness);
+      if (p.bark.texture.empty()) {
+        m.baseColor = clampedColor(p.bark.color);
+      } else {
+        m.texture = builder.texture(p.bark.texture, true);  // the texture carries the colour
+      }
+      object.parts.push_back({"bark", &pm.bark, builder.material(std::move(m))});
+    }
+    for (size_t s = 0; s < pm.leaves.size(); ++s) {
+      if (pm.leaves[s].empty()) continue;
+      plant::LeafShape shape = mesh::leafShapeFor(p, s);
+      ExportMaterial m;
+      m.kind = Kind::Leaf;
+      m.name = "leaf-" + textureLabel(shape.texture);
+      m.baseColor = clampedColor(shape.tint);
+      m.roughness = 0.5f;  // a glossy cuticle
+      m.texture = builder.texture(shape.texture, false);
+      m.alphaMask = true;
+      m.doubleSided = true;
+      object.parts.push_back({fmt::format("leaves-{}", s), &pm.leaves[s], builder.material(std::move(m))});
+    }
+    for (const mesh::PrimitiveGroup& g : pm.primitives) {
+      if (g.mesh.empty()) continue;
+      ExportMaterial m;
+      m.name = g.name.empty() ? std::string("primitive") : g.name;
+      m.baseColor = clampedColor(g.color);
+      m.roughness = 0.8f;
+      if (!g.texture.empty()) m.texture = builder.texture(g.texture, true);
+      object.parts.push_back({m.name, &g.mesh, builder.material(m)});
+    }
+    model.objects.push_back(std::move(object));
+  }
+  for (size_t i = 0; i < scene.meshes.size(); ++i) {
+    const NamedMesh& n = scene.meshes[i];
+    ExportObject object;
+    object.name = n.name.empty() ? fmt::format("mesh-{}", i) : n.name;
+    if (!model.extraMeshes[i].empty()) {
+      ExportMaterial m;
+      m.name = object.name;
+      m.baseColor = clampedColor(n.color);
+      m.roughness = 0.8f;
+      object.parts.push_back({object.name, &model.extraMeshes[i], builder.material(std::move(m))});
+    }
+    model.objects.push_back(std::move(object));
+  }
+  return model;
+}
+
+}  // namespace tendril::io

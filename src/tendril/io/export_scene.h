@@ -1,0 +1,31 @@
+// What the exporters write: plants (meshed on the way out) and extra named meshes such as
+// obstacles, each with a plain material.
+#pragma once
+
+#include "tendril/core/triangle_mesh.h"
+#include "tendril/mesh/mesh_options.h"
+#include "tendril/plant/plant_model.h"
+
+#include <string>
+#include <vector>
+
+namespace tendril::io {
+
+struct NamedMesh {
+  std::string name;
+  TriangleMesh mesh;                     // world space; normals computed when missing
+  Vec3 color = Vec3(0.6f, 0.6f, 0.6f);  // linear RGB
+};
+
+struct ExportScene {
+  std::vector<plant::PlantModel> plants;
+  std::vector<NamedMesh> meshes;
+};
+
+struct ExportOptions {
+  mesh::MeshOptions mesh;
+};
+
+inline ExportOptions defaultExportOptions() { return {}; }
+
+}  // namespace tendril::io

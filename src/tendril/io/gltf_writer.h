@@ -1,0 +1,24 @@
+// glTF 2.0 binary export (.glb) through tinygltf.
+//
+// One scene; one node per plant (named after it) and per extra mesh. A plant's mesh has one
+// primitive per part: "bark" (PBR metallic-roughness, the bark texture repeating), one per
+// leaf shape (alphaMode MASK with cutoff 0.5, double-sided, the leaf texture clamped, the
+// shape's tint as baseColorFactor) and one per primitive material. Attributes: POSITION (with
+// min/max), unit NORMAL, TEXCOORD_0 (glTF's v points down the image, so v is flipped from the
+// mesh convention); indices are uint16 when a part has fewer than 65536 vertices, else uint32.
+// Images are embedded as PNG/JPEG buffer views. Nothing unused is written, so the Khronos
+// validator reports no errors and no warnings. The bytes depend only on the input, not on the
+// thread count. The file is replaced atomically (atomic_file.h).
+#pragma once
+
+#include "tendril/io/export_model.h"
+#include "tendril/io/export_scene.h"
+
+#include <filesystem>
+
+namespace tendril::io {
+
+void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options = {});
+void writeGlb(const ExportModel& model, const std::filesystem::path& path);
+
+}  // namespace tendril::io

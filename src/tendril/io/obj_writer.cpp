@@ -1,0 +1,167 @@
+#include "tendril/io/obj_writer.h"
+
+#include "tendril/core/error.h"
+#include "tendril/core/parallel.h"
+#include "tendril/io/atomic_file.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+
+namespace tendril::io {
+namespace {
+
+// OBJ and MTL names end at whitespace.
+std::string safeName(const std::string& name) {
+  std::string s = name.empty() ? std::string("unnamed") : name;
+  for (char& c : s)
+    if (std::isspace(static_cast<unsigned char>(c)) || c == '#') c = '_';
+  return s;
+}
+
+// Appends text lines to a string without iostreams; floats in their shortest exact form.
+class LineWriter {
+ public:
+  explicit LineWriter(std::string& out) : out_(out) {}
+  void text(std::string_view s) { out_.append(s); }
+  void number(float v) {
+    char buf[32];
+    auto r = std::to_chars(buf, buf + sizeof(buf), v == 0.0f ? 0.0f : v);  // no "-0"
+    out_.append(buf, r.ptr);
+  }
+  void integer(uint64_t v) {
+    char buf[24];
+    auto r = std::to_chars(buf, buf + sizeof(buf), v);
+    out_.append(buf, r.ptr);
+  }
+  void vec(std::string_view tag, const float* v, int n) {
+    out_.append(tag);
+    for (int i = 0; i < n; ++i) {
+      out_.push_back(' ');
+      number(v[i]);
+    }
+    out_.push_back('\n');
+  }
+
+ private:
+  std::string& out_;
+};
+
+// Formats items [0, count) with `format(i, LineWriter&)` in parallel chunks and writes them
+// in order, a bounded batch of chunks at a time.
+template <class F>
+void writeFormatted(AtomicFileWriter& file, size_t count, F&& format) {
+  constexpr size_t kChunk = size_t(1) << 14;
+  constexpr size_t kBatch = 64;
+  size_t chunks = (count + kChunk - 1) / kChunk;
+  std::vector<std::string> text(std::min(chunks, kBatch));
+  for (size_t first = 0; first < chunks; first += kBatch) {
+    size_t n = std::min(kBatch, chunks - first);
+    parallelFor(0, n, [&](size_t k) {
+      std::string& s = text[k];
+      s.clear();
+      LineWriter w(s);
+      size_t begin = (first + k) * kChunk, end = std::min(count, begin + kChunk);
+      for (size_t i = begin; i < end; ++i) format(i, w);
+    }, 1);
+    for (size_t k = 0; k < n; ++k) file.write(text[k]);
+  }
+}
+
+std::string extensionFor(const std::string& mime) { return mime == "image/jpeg" ? ".jpg" : ".png"; }
+
+}  // namespace
+
+void writeObj(const ExportModel& model, const std::filesystem::path& path) {
+  std::filesystem::path dir = path.parent_path();
+  std::string stem = path.stem().string();
+  if (stem.empty()) throw Error(path.string(), "", "cannot write .obj: not a file name");
+  std::error_code ec;
+  if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
+    throw Error(path.string(), "", fmt::format("cannot write: directory {} does not exist", dir.string()));
+
+  // File names of the images, by the role of the first material using them.
+  std::vector<std::string> imageFile(model.images.size());
+  int barkCount = 0, leafCount = 0, otherCount = 0;
+  for (const ExportMaterial& m : model.materials) {
+    if (m.texture < 0) continue;
+    int image = model.textures[m.texture].image;
+    if (!imageFile[image].empty()) continue;
+    std::string role;
+    switch (m.kind) {
+      case ExportMaterial::Kind::Bark:
+        role = barkCount++ == 0 ? std::string("bark") : fmt::format("bark{}", barkCount - 1);
+        break;
+      case ExportMaterial::Kind::Leaf:
+        role = fmt::format("leaf{}", leafCount++);
+        break;
+      case ExportMaterial::Kind::Plain:
+        role = fmt::format("tex{}", otherCount++);
+        break;
+    }
+    imageFile[image] = safeName(stem) + "_" + role + extensionFor(model.images[image].image.mimeType);
+  }
+  for (size_t i = 0; i < model.images.size(); ++i)
+    if (!imageFile[i].empty()) writeFileAtomic(dir / imageFile[i], model.images[i].image.bytes);
+
+  // Materials.
+  std::string mtlName = stem + ".mtl";
+  std::string mtl = fmt::format("# Tendril {}\n", TENDRIL_VERSION);
+  for (const ExportMaterial& m : model.materials) {
+    mtl += fmt::format("\nnewmtl {}\n", safeName(m.name));
+    mtl += fmt::format("Kd {} {} {}\n", m.baseColor.x(), m.baseColor.y(), m.baseColor.z());
+    mtl += "Ka 0 0 0\nKs 0.04 0.04 0.04\n";
+    // Phong exponent from roughness (Blinn-Phong ~ 2 / alpha^2 - 2 with alpha = roughness²),
+    // and the PBR extension's Pr for importers that read it.
+    float alpha = std::max(m.roughness * m.roughness, 0.03f);
+    mtl += fmt::format("Ns {}\nPr {}\nd 1\nillum 2\n", std::min(1000.0f, 2.0f / (alpha * alpha) - 2.0f), m.roughness);
+    if (m.texture >= 0) {
+      const std::string& file = imageFile[model.textures[m.texture].image];
+      mtl += fmt::format("map_Kd {}\n", file);
+      if (m.alphaMask) mtl += fmt::format("map_d {}\n", file);
+    }
+  }
+  writeFileAtomic(dir / mtlName, mtl);
+
+  // Geometry: OBJ indices are 1-based and global over the file.
+  AtomicFileWriter obj(path);
+  obj.write(fmt::format("# Tendril {}\nmtllib {}\n", TENDRIL_VERSION, mtlName));
+  uint64_t base = 1;
+  for (const ExportObject& object : model.objects) {
+    obj.write(fmt::format("o {}\n", safeName(object.name)));
+    for (const ExportPart& part : object.parts) {
+      const TriangleMesh& m = *part.mesh;
+      obj.write(fmt::format("g {}_{}\nusemtl {}\n", safeName(object.name), safeName(part.name),
+                            safeName(model.materials[part.material].name)));
+      writeFormatted(obj, m.positions.size(), [&](size_t i, LineWriter& w) { w.vec("v", m.positions[i].data(), 3); });
+      writeFormatted(obj, m.uvs.size(), [&](size_t i, LineWriter& w) { w.vec("vt", m.uvs[i].data(), 2); });
+      writeFormatted(obj, m.normals.size(), [&](size_t i, LineWriter& w) { w.vec("vn", m.normals[i].data(), 3); });
+      bool uvs = !m.uvs.empty();
+      writeFormatted(obj, m.triangleCount(), [&](size_t t, LineWriter& w) {
+        w.text("f");
+        for (int k = 0; k < 3; ++k) {
+          uint64_t v = base + m.indices[3 * t + k];
+          w.text(" ");
+          w.integer(v);
+          w.text(uvs ? "/" : "//");
+          if (uvs) {
+            w.integer(v);
+            w.text("/");
+          }
+          w.integer(v);
+        }
+        w.text("\n");
+      });
+      base += m.positions.size();
+    }
+  }
+  obj.commit();
+}
+
+void writeObj(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options) {
+  writeObj(buildExportModel(scene, options), path);
+}
+
+}  // namespace tendril::io
