@@ -1,2 +1,75 @@
+// tendril: the command-line front end over tendril::session. See docs/cli.md.
+#include "commands.h"
+
+#include "tendril/core/error.h"
+#include "tendril/core/log.h"
+#include "tendril/core/parallel.h"
+
+#include <algorithm>
 #include <cstdio>
-int main() { std::puts("tendril " TENDRIL_VERSION); }
+
+namespace tendril::cli {
+
+std::vector<CommandDef>& commandRegistry() {
+  static std::vector<CommandDef> commands;
+  return commands;
+}
+
+void addCommonOptions(CLI::App& sub, CommonOptions& options) {
+  sub.add_option("--threads", options.threads, "Worker threads (0 = all cores); results do not depend on it")
+      ->check(CLI::Range(0, 1024));
+  sub.add_flag("-q,--quiet", options.quiet, "Print nothing but errors");
+}
+
+void applyCommonOptions(const CommonOptions& options) {
+  setThreadCount(options.threads);
+  if (options.quiet) log::setLevel(log::Level::Error);
+}
+
+}  // namespace tendril::cli
+
+int main(int argc, char** argv) {
+  using namespace tendril;
+  CLI::App app{"Tendril: plants that grow, climb, move in the wind and can be edited while they grow.\n"
+               "Exit codes: 0 success, 2 bad input (files, parameters, arguments), 1 internal error.",
+               "tendril"};
+  app.set_version_flag("--version", std::string("tendril ") + TENDRIL_VERSION);
+  app.require_subcommand(1);
+  app.fallthrough(false);
+
+  auto& commands = cli::commandRegistry();
+  std::stable_sort(commands.begin(), commands.end(),
+                   [](const cli::CommandDef& a, const cli::CommandDef& b) { return a.order < b.order; });
+  std::vector<std::pair<CLI::App*, std::function<int()>>> runners;
+  for (cli::CommandDef& c : commands) {
+    CLI::App* sub = app.add_subcommand(c.name, c.description);
+    runners.emplace_back(sub, c.setup(*sub));
+  }
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::string what = e.what();
+    std::replace(what.begin(), what.end(), '\n', ' ');
+    std::fprintf(stderr, "tendril: error: command line: %s (see tendril --help)\n", what.c_str());
+    return 2;
+  }
+
+  try {
+    for (auto& [sub, run] : runners)
+      if (sub->parsed()) return run();
+    return 2;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "tendril: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tendril: internal error: %s\n", e.what());
+    return 1;
+  }
+}

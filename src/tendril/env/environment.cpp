@@ -103,6 +103,8 @@ struct ClosestSearch {
   const uint32_t* const* indices; // per geometry id
   Vec3 p;
   float bestDist2;
+  const Vec3* facing = nullptr;   // optional filter: skip triangles facing this direction
+  float cosLimit = 1.0f;
   Vec3 bestPoint = Vec3::Zero();
   uint32_t bestGeom = RTC_INVALID_GEOMETRY_ID;
   uint32_t bestPrim = RTC_INVALID_GEOMETRY_ID;
@@ -115,6 +117,12 @@ bool closestCallback(RTCPointQueryFunctionArguments* args) {
   const uint32_t* tri = s->indices[args->geomID] + 3 * size_t(args->primID);
   ClosestOnTriangle c = closestPointOnTriangle(s->p, v[tri[0]], v[tri[1]], v[tri[2]]);
   float d2 = (c.point - s->p).squaredNorm();
+  if (s->facing && d2 < s->bestDist2) {
+    Vec3 n = (v[tri[1]] - v[tri[0]]).cross(v[tri[2]] - v[tri[0]]);
+    if (n.dot(s->p - c.point) < 0.0f) n = -n;  // the side the query point is on
+    float len = n.norm();
+    if (len > 0.0f && n.dot(*s->facing) > s->cosLimit * len) return false;
+  }
   // Ties are broken by (geometry, primitive) so the answer never depends on traversal order.
   bool better = d2 < s->bestDist2 ||
                 (d2 == s->bestDist2 && (args->geomID < s->bestGeom ||
@@ -347,6 +355,16 @@ size_t Environment::countSegmentHits(const Vec3& a, const Vec3& b) const {
 }
 
 std::optional<SurfacePoint> Environment::closestPoint(const Vec3& p, float radius) const {
+  return closest(p, radius, nullptr, 1.0f);
+}
+
+std::optional<SurfacePoint> Environment::closestPointFacing(const Vec3& p, float radius, const Vec3& direction,
+                                                            float cosLimit) const {
+  return closest(p, radius, &direction, cosLimit);
+}
+
+std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, const Vec3* direction,
+                                                 float cosLimit) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
   if (obstacles_.empty()) return std::nullopt;
   // Geometry ids equal obstacle indices, so small per-call tables suffice.
@@ -367,7 +385,7 @@ std::optional<SurfacePoint> Environment::closestPoint(const Vec3& p, float radiu
     verts[i] = obstacles_[i]->world.data();
     inds[i] = obstacles_[i]->welded.indices.data();
   }
-  ClosestSearch s{verts, inds, p, radius * radius};
+  ClosestSearch s{verts, inds, p, radius * radius, direction, cosLimit};
   runClosest(static_cast<RTCScene>(scene_), s, radius);
   if (s.bestGeom == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   const ObstacleData& o = *obstacles_[s.bestGeom];
@@ -377,9 +395,14 @@ std::optional<SurfacePoint> Environment::closestPoint(const Vec3& p, float radiu
   sp.normal = o.faceNormalWorld[s.bestPrim];
   sp.obstacle = s.bestGeom;
   sp.triangle = s.bestPrim;
+  // Direction from the surface to the query. On a face interior it is the face normal (signed
+  // toward p) — exact, where p − q would be rounding noise for points on the surface. At edges
+  // and vertices it is p − q, or the pseudonormal when p sits on the feature itself.
   Vec3 away = p - s.bestPoint;
   float len = away.norm();
-  if (len > 1e-7f) {
+  if (s.bestFeature == TriangleFeature::Face) {
+    sp.away = away.dot(sp.normal) < 0.0f && len > 1e-5f ? Vec3(-sp.normal) : sp.normal;
+  } else if (len > 1e-5f) {
     sp.away = away / len;
   } else if (o.info.closed) {
     const uint32_t* tri = &o.welded.indices[3 * size_t(s.bestPrim)];
@@ -477,7 +500,7 @@ float Environment::signedDistance(const Vec3& p, Vec3* gradient) const {
 LightSample Environment::light(const Vec3& p) const {
   LightSample out;
   float total = 0.0f, visible = 0.0f;
-  Vec3 dir = Vec3::Zero();
+  Vec3 dir = Vec3::Zero(), nominal = Vec3::Zero();
   for (const Light& l : lights_) {
     if (l.intensity <= 0.0f) continue;
     Vec3 toLight;
@@ -500,10 +523,13 @@ LightSample Environment::light(const Vec3& p) const {
     total += l.intensity;
     visible += l.intensity * v;
     dir += l.intensity * v * toLight;
+    nominal += l.intensity * toLight;
   }
   if (total > 0.0f) out.exposure = visible / total;
   float len = dir.norm();
   if (len > 0.0f) out.direction = dir / len;
+  len = nominal.norm();
+  if (len > 0.0f) out.nominal = nominal / len;
   return out;
 }
 

@@ -74,8 +74,9 @@ struct Light {
 };
 
 struct LightSample {
-  float exposure = 0.0f;           // in [0, 1]: 1 − occlusion, intensity-weighted over lights
-  Vec3 direction = Vec3::Zero();   // unit direction toward the visible light (zero if none)
+  float exposure = 0.0f;          // in [0, 1]: 1 − occlusion, intensity-weighted over lights
+  Vec3 direction = Vec3::Zero();  // unit direction toward the visible light (zero if none)
+  Vec3 nominal = Vec3::Zero();    // unit direction toward all lights, occluded or not
 };
 
 // A painted stroke: points on surfaces that attract (or repel) growth within `radius`.
@@ -122,6 +123,10 @@ class Environment {
   size_t countSegmentHits(const Vec3& a, const Vec3& b) const;
   // Closest obstacle surface point within `radius` of p (Embree point query).
   std::optional<SurfacePoint> closestPoint(const Vec3& p, float radius) const;
+  // The same, ignoring triangles that face `direction`: those whose normal (turned toward p)
+  // has n·direction > cosLimit. A shoot growing away from a surface is not held by it.
+  std::optional<SurfacePoint> closestPointFacing(const Vec3& p, float radius, const Vec3& direction,
+                                                 float cosLimit) const;
   // Exact signed distance (negative inside closed obstacles) from the closest point and the
   // angle-weighted pseudonormal; +maxDistance when nothing is that close.
   float exactSignedDistance(const Vec3& p, float maxDistance) const;
@@ -144,6 +149,7 @@ class Environment {
   struct ObstacleData;
   struct StrokeGrid;
   void buildSdf(ObstacleData& o) const;
+  std::optional<SurfacePoint> closest(const Vec3& p, float radius, const Vec3* direction, float cosLimit) const;
   float obstacleSdf(const ObstacleData& o, const Vec3& worldP, Vec3* gradient) const;
 
   std::vector<std::unique_ptr<ObstacleData>> obstacles_;

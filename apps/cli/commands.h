@@ -1,0 +1,41 @@
+// The CLI's subcommands. Each lives in its own cmd_*.cpp and registers itself; main.cpp turns
+// them into CLI11 subcommands and maps errors to exit codes (0 ok, 2 bad input, 1 internal).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace tendril::cli {
+
+// Configures the subcommand's options and returns the function that runs it (exit code).
+using CommandSetup = std::function<std::function<int()>(CLI::App& sub)>;
+
+struct CommandDef {
+  std::string name;
+  std::string description;
+  int order = 0;  // position in --help
+  CommandDef* self = nullptr;
+  CommandSetup setup;
+};
+
+std::vector<CommandDef>& commandRegistry();
+
+struct RegisterCommand {
+  RegisterCommand(std::string name, std::string description, int order, CommandSetup setup) {
+    commandRegistry().push_back({std::move(name), std::move(description), order, nullptr, std::move(setup)});
+  }
+};
+
+// Options several commands share.
+struct CommonOptions {
+  int threads = 0;
+  bool quiet = false;
+};
+void addCommonOptions(CLI::App& sub, CommonOptions& options);
+// Applies --threads and --quiet (log level).
+void applyCommonOptions(const CommonOptions& options);
+
+}  // namespace tendril::cli

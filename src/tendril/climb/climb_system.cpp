@@ -1,0 +1,447 @@
+#include "tendril/climb/climb_system.h"
+
+#include "tendril/core/error.h"
+#include "tendril/core/log.h"
+#include "tendril/core/parallel.h"
+#include "tendril/core/random.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace tendril::climb {
+
+namespace {
+
+constexpr uint64_t kPurposeRule = purposeId("climb.rule");
+constexpr uint64_t kPurposeRandomTropism = purposeId("climb.random-tropism");
+constexpr uint64_t kPurposeBranch = purposeId("climb.branch");
+constexpr uint64_t kPurposeLeaf = purposeId("climb.leaf");
+constexpr uint64_t kPurposeHold = purposeId("climb.hold");
+
+// Where a new segment may go: the end point and direction after collision avoidance.
+struct Avoided {
+  bool ok = false;
+  Vec3 end = Vec3::Zero();
+  Vec3 dir = Vec3::Zero();
+  Vec3 normal = Vec3::Zero();  // away from the surface that was hit last, if any
+  bool hit = false;
+};
+
+// Seed 003 §3.5, eq. 5: a tip about to grow into an obstacle is turned parallel to the hit
+// triangle (d' = d − n(n·d)). We repeat the test for the turned segment (corners), and keep
+// the segment end at least `offset` from every surface — the role of eq. 5's translation,
+// which moves the tip to the intersection point: a branch of radius r must not sink into the
+// wall it climbs, and rays must not start on a surface.
+Avoided avoidCollisions(const env::Environment& env, const Vec3& p, Vec3 d, float len, float offset, Vec3 normal) {
+  Avoided out;
+  for (int attempt = 0; attempt < 6; ++attempt) {
+    if (auto hit = env.rayCast(p, d, len + offset)) {
+      Vec3 n = hit->normal;
+      if (n.dot(d) > 0.0f) n = -n;  // open meshes: use the side facing the tip
+      Vec3 turned = d - n * n.dot(d);
+      if (turned.squaredNorm() < 1e-6f) {
+        // Head-on: slide along the surface in the direction of the previous frame normal's
+        // projection, or any tangent.
+        turned = normal - n * n.dot(normal);
+        if (turned.squaredNorm() < 1e-6f) turned = anyPerpendicular(n);
+      }
+      d = turned.normalized();
+      normal = n;
+      out.hit = true;
+      continue;
+    }
+    Vec3 end = p + d * len;
+    if (auto sp = env.closestPoint(end, offset)) {
+      end = sp->point + sp->away * offset;
+      Vec3 seg = end - p;
+      float l = seg.norm();
+      if (l < 1e-5f) return out;
+      Vec3 nd = seg / l;
+      if (env.rayCast(p, nd, l)) {  // pushing out of one surface led into another
+        d = nd;
+        continue;
+      }
+      out.ok = true;
+      out.end = end;
+      out.dir = nd;
+      out.normal = normal;
+      return out;
+    }
+    out.ok = true;
+    out.end = end;
+    out.dir = d;
+    out.normal = normal;
+    return out;
+  }
+  return out;
+}
+
+// Seed 003 eq. 3–4: rotate the direction toward the tropism vector v about d × v, by an angle
+// proportional to |d × v| (the strength-weighted sine, as in ABOP §2.4) but never past v.
+Vec3 applyTropism(const Vec3& d, const Vec3& v) {
+  Vec3 axis = d.cross(v);
+  float s = axis.norm();
+  if (s < 1e-7f) return d;
+  float angle = std::min(s, angleBetween(d, v));
+  return (axisAngle(axis, angle) * d).normalized();
+}
+
+}  // namespace
+
+struct ClimbSystem::Outcome {
+  bool addNode = false;
+  plant::PlantModel::NodeDef node;
+  Vec3 end = Vec3::Zero();
+  int leafCount = 0;
+  plant::PlantModel::LeafDef leaves[2];
+  bool dies = false;
+  bool branch = false;
+  Tip updated;
+  Tip branchTip;
+};
+
+ClimbSystem::ClimbSystem(uint64_t sceneSeed, float stepTime) : sceneSeed_(sceneSeed), stepTime_(stepTime) {}
+
+uint32_t ClimbSystem::addPlant(const ClimbPlantDef& def, const env::Environment& env) {
+  const ClimbSpecies& s = def.species;
+  auto plant = std::make_unique<Plant>();
+  plant->def = def;
+  plant->id = static_cast<uint32_t>(plants_.size());
+  plant->model.name = def.name;
+  plant->model.species = s.name;
+  plant->model.bark = s.bark;
+  plant->model.leafShapes = s.leafShapes;
+
+  Vec3 p = def.position;
+  float sd = env.exactSignedDistance(p, 1.0f);
+  if (sd < 0.0f)
+    throw Error(def.name, "", fmt::format("seed position ({:.3g}, {:.3g}, {:.3g}) lies inside an obstacle", p.x(),
+                                          p.y(), p.z()));
+  Tip tip;
+  tip.id = plant->nextTipId++;
+  tip.dir = def.direction.normalized();
+  tip.normal = anyPerpendicular(tip.dir);
+  if (auto sp = env.closestPoint(p, s.surfaceOffset)) {
+    // Seeds usually sit on the ground: lift them to the stand-off distance.
+    p = sp->point + sp->away * s.surfaceOffset;
+    tip.normal = sp->away;
+  }
+  if (auto sp = env.closestPoint(p, s.adhesionDistance)) tip.normal = sp->away;
+  tip.position = p;
+  tip.radius = s.radius;
+  tip.length = s.segmentLength;
+  tip.leafSize = s.leafSize;
+  tip.shootStart = Vec3(s.radius, s.segmentLength, s.leafSize);
+  plant->tips.push_back(tip);
+  plants_.push_back(std::move(plant));
+  return plants_.back()->id;
+}
+
+void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environment& env, Outcome& out) const {
+  const ClimbSpecies& s = plant.def.species;
+  const uint64_t seed = plant.def.seed ^ mix64(sceneSeed_);
+  auto rng = [&](uint64_t purpose) { return Rng(RandomKey{seed, plant.id, tip.id, step_, purpose}); };
+  Tip t = tip;
+
+  // Climbing state (seed 003 §3.6): is a support surface within reach of the tip?
+  std::optional<env::SurfacePoint> support =
+      env.closestPointFacing(t.position, s.adhesionDistance, t.dir, std::cos(s.releaseAngle));
+  const bool climbing = support.has_value();
+  if (climbing) t.normal = support->away;
+  t.unsupported = climbing ? 0 : t.unsupported + 1;
+  if (s.maxUnsupported > 0 && t.unsupported > uint32_t(s.maxUnsupported)) {
+    out.dies = true;  // too long without support: the shoot flops and dies
+    return;
+  }
+
+  bool avoid = false;
+  for (const Rule& r : s.rules) avoid |= r.kind == RuleKind::CollisionAvoidance;
+
+  // Program 1: Tip -> segment(Tip) Tip.
+  Vec3 end = t.position + t.dir * t.length;
+  Vec3 dir = t.dir;
+  if (avoid) {
+    Avoided a = avoidCollisions(env, t.position, t.dir, t.length, s.surfaceOffset, t.normal);
+    if (!a.ok) {  // boxed in: nowhere to grow
+      out.dies = true;
+      return;
+    }
+    end = a.end;
+    dir = a.dir;
+    if (a.hit) t.normal = a.normal;
+    // Hold on: a climbing tip whose segment would end out of reach of every surface bends
+    // back toward the nearest one (over an edge, round a corner), unless it breaks free.
+    if (climbing && s.surfaceHold > 0.0f && !env.closestPoint(end, s.adhesionDistance) &&
+        rng(kPurposeHold).bernoulli(s.surfaceHold)) {
+      if (auto q = env.closestPoint(end, t.length + s.adhesionDistance)) {
+        Vec3 target = q->point + q->away * s.surfaceOffset - t.position;
+        if (target.squaredNorm() > 1e-10f) {
+          Avoided b = avoidCollisions(env, t.position, target.normalized(), t.length, s.surfaceOffset, q->away);
+          if (b.ok) {
+            end = b.end;
+            dir = b.dir;
+            t.normal = b.hit ? b.normal : q->away;
+          }
+        }
+      }
+    }
+  }
+  if (s.crowdingRadius > 0.0f && occupancy_.countWithin(end, s.crowdingRadius, s.crowdingLimit) >= s.crowdingLimit) {
+    out.dies = true;  // the plant already covers this spot
+    return;
+  }
+
+  plant::PlantModel::NodeDef& node = out.node;
+  node.position = t.position;
+  node.orientation = frameFromYZ(dir, t.normal);
+  node.length = (end - t.position).norm();
+  node.radius = std::max(t.radius, s.minRadius);
+  node.order = t.order;
+  node.flags = (climbing ? plant::kNodeClimbing : 0u) |
+               ((t.startsBranch && t.segments == 0) ? plant::kNodeBranchStart : 0u);
+  out.addNode = true;
+  out.end = end;
+
+  const Mat3 frame = node.orientation.toRotationMatrix();
+  t.normal = frame.col(2);
+  t.position = end;
+  t.dir = dir;
+  t.segments += 1;
+
+  // The rules of Table 1, in the species' order.
+  for (size_t ri = 0; ri < s.rules.size() && !out.dies; ++ri) {
+    const Rule& r = s.rules[ri];
+    if (t.segments % uint32_t(r.every) != 0) continue;
+    if (r.probability < 1.0f && !rng(kPurposeRule + ri).bernoulli(r.probability)) continue;
+    switch (r.kind) {
+      case RuleKind::Tropism: {
+        // Eq. 6 (not climbing) and eq. 7 (climbing: adhesion replaces gravity).
+        Vec3 v = Vec3::Zero();
+        if (climbing) v += s.adhesion * (-support->away);
+        else v += s.gravity * Vec3(0, -1, 0);
+        if (s.light > 0.0f) {
+          env::LightSample l = env.light(t.position);
+          v += s.light * (l.exposure * l.direction + s.lightAmbient * (1.0f - l.exposure) * l.nominal);
+        }
+        if (s.randomness > 0.0f) v += s.randomness * rng(kPurposeRandomTropism).unitVector();
+        if (s.userDirectionStrength > 0.0f) v += s.userDirectionStrength * s.userDirection;
+        if (s.windStrength > 0.0f) v += s.windStrength * env.wind(t.position, float(step_) * stepTime_);
+        if (s.attraction > 0.0f) v += s.attraction * env.attraction(t.position);
+        t.dir = applyTropism(t.dir, v);
+        break;
+      }
+      case RuleKind::Decrease:  // eq. 8
+        t.radius *= s.decreaseRadius;
+        t.length *= s.decreaseLength;
+        t.leafSize *= s.decreaseLeafSize;
+        if (t.length < s.minLength) out.dies = true;
+        break;
+      case RuleKind::CollisionAvoidance:
+        break;  // applied to every segment as it is added (above)
+      case RuleKind::Die:
+        out.dies = true;
+        break;
+      case RuleKind::PlaceLeaf: {
+        if (s.leafShapes.empty() || t.leafSize <= 0.0f) break;
+        Rng lr = rng(kPurposeLeaf);
+        // Attachment: the segment end, lifted over the stem's surface along the frame normal.
+        const Vec3 attachLocal(0.0f, node.length, node.radius + s.leafLift);
+        const Vec3 attach = node.position + node.orientation * attachLocal;
+        if (env.rayCast(end, frame.col(2), node.radius + s.leafLift)) break;
+        // Blades lie parallel to the surface nearest to them, upper side away from it (seed
+        // 003 §3.10); in free air they turn toward the light (seed 000 §4.3).
+        Vec3 leafUp = frame.col(2);
+        if (auto near = env.closestPoint(attach, s.adhesionDistance)) {
+          leafUp = near->away;
+        } else if (s.light > 0.0f) {
+          Vec3 toLight = env.light(attach).nominal;
+          if (toLight.squaredNorm() > 0.0f) leafUp = toLight;
+        }
+        // The blade's base direction: the growth direction laid into the blade's plane.
+        const Quat worldFromBlade = frameFromYZ(dir - leafUp * leafUp.dot(dir), leafUp);
+        const Quat nodeFromBlade = node.orientation.conjugate() * worldFromBlade;
+        for (int side = 0; side < 2; ++side) {
+          float angle = (side == 0 ? 1.0f : -1.0f) * (s.leafSpread + s.leafJitter * lr.uniform(-1.0f, 1.0f));
+          Quat nodeFromLeaf = (nodeFromBlade * axisAngle(Vec3::UnitZ(), angle)).normalized();
+          uint16_t shape = static_cast<uint16_t>(lr.below(uint32_t(s.leafShapes.size())));
+          float aspect = s.leafShapes[shape].aspect;
+          Mat3 leafFrame = (node.orientation * nodeFromLeaf).toRotationMatrix();
+          // Fit the blade to the surroundings (seed 003 §3.10 lays blades parallel to the
+          // support): shrink it until no corner is behind a surface, or drop it.
+          for (float scale : {1.0f, 0.7f, 0.45f}) {
+            float size = t.leafSize * scale;
+            float petiole = s.leafPetiole * scale;
+            float halfWidth = 0.5f * size * aspect;
+            const Vec3 corners[4] = {
+                attach + leafFrame * Vec3(-halfWidth, petiole, 0), attach + leafFrame * Vec3(halfWidth, petiole, 0),
+                attach + leafFrame * Vec3(halfWidth, petiole + size, 0),
+                attach + leafFrame * Vec3(-halfWidth, petiole + size, 0)};
+            // The blade must not pass through a surface: rays from the attachment to every
+            // corner and along every edge.
+            bool clear = true;
+            for (int k = 0; k < 4 && clear; ++k) {
+              for (const Vec3& from : {attach, corners[(k + 3) % 4]}) {
+                Vec3 d = corners[k] - from;
+                float len = d.norm();
+                if (len > 0.0f && env.rayCast(from, d / len, len)) {
+                  clear = false;
+                  break;
+                }
+              }
+            }
+            if (!clear) continue;
+            plant::PlantModel::LeafDef& leaf = out.leaves[out.leafCount++];
+            leaf.offset = attachLocal;
+            leaf.rotation = nodeFromLeaf;
+            leaf.size = size;
+            leaf.petiole = petiole;
+            leaf.thickness = s.leafThickness;
+            leaf.shape = shape;
+            break;
+          }
+        }
+        if (out.leafCount > 0) node.flags |= plant::kNodeLeafNode;
+        break;
+      }
+      case RuleKind::Branch: {
+        // Seed 003 §3.7: a node at the splitting point and a new tip turned 35–40° away.
+        if (s.crowdingRadius > 0.0f &&
+            occupancy_.countWithin(end, s.crowdingRadius, s.crowdingLimit) >= std::max(1, s.crowdingLimit / 2))
+          break;
+        Rng br = rng(kPurposeBranch);
+        float angle = br.uniform(s.branchAngleMin, s.branchAngleMax) * (br.bernoulli(0.5f) ? 1.0f : -1.0f);
+        // Climbing shoots branch within the surface plane; free ones about a random axis.
+        Vec3 axis = climbing ? t.normal : Vec3(dir.cross(br.unitVector()));
+        if (axis.squaredNorm() < 1e-8f) axis = anyPerpendicular(dir);
+        Tip b;
+        b.position = end;
+        b.dir = (axisAngle(axis, angle) * dir).normalized();
+        b.normal = t.normal;
+        b.shootStart = t.shootStart.cwiseProduct(s.branchFalloff);
+        b.radius = b.shootStart.x();
+        b.length = b.shootStart.y();
+        b.leafSize = b.shootStart.z();
+        b.order = static_cast<uint16_t>(t.order + 1);
+        b.unsupported = t.unsupported;
+        b.startsBranch = true;
+        out.branch = true;
+        out.branchTip = b;
+        break;
+      }
+    }
+  }
+  out.updated = t;
+}
+
+void ClimbSystem::step(const env::Environment& env) {
+  // Gather every live tip of every plant; grow them in parallel into their own outcomes.
+  struct Ref {
+    uint32_t plant;
+    uint32_t tip;
+  };
+  std::vector<Ref> refs;
+  for (const auto& p : plants_)
+    for (uint32_t i = 0; i < p->tips.size(); ++i) refs.push_back({p->id, i});
+  std::vector<Outcome> outcomes(refs.size());
+  parallelFor(0, refs.size(), [&](size_t i) {
+    const Plant& p = *plants_[refs[i].plant];
+    growTip(p, p.tips[refs[i].tip], env, outcomes[i]);
+  }, 8);
+
+  // Merge in tip order: node and tip ids depend only on the order, never on the threads.
+  size_t k = 0;
+  for (auto& pp : plants_) {
+    Plant& p = *pp;
+    std::vector<Tip> next;
+    next.reserve(p.tips.size() + 8);
+    for (uint32_t i = 0; i < p.tips.size(); ++i, ++k) {
+      Outcome& o = outcomes[k];
+      int32_t nodeIndex = p.tips[i].lastNode;
+      if (o.addNode) {
+        o.node.parent = p.tips[i].lastNode;
+        nodeIndex = p.model.addNode(o.node);
+        p.birthStep.push_back(step_);
+        occupancy_.insert(o.end);
+        for (int l = 0; l < o.leafCount; ++l) {
+          o.leaves[l].node = nodeIndex;
+          p.model.addLeaf(o.leaves[l]);
+        }
+      }
+      if (o.dies) {
+        if (nodeIndex >= 0) p.model.flags[nodeIndex] |= plant::kNodeDead;
+      } else {
+        o.updated.lastNode = nodeIndex;
+        next.push_back(o.updated);
+      }
+      if (o.branch && nodeIndex >= 0) {
+        o.branchTip.lastNode = nodeIndex;
+        o.branchTip.id = p.nextTipId++;
+        next.push_back(o.branchTip);
+      }
+    }
+    p.tips = std::move(next);
+    if (!p.capped && p.model.nodeCount() >= size_t(p.def.species.maxSegments)) {
+      p.capped = true;
+      for (const Tip& t : p.tips)
+        if (t.lastNode >= 0) p.model.flags[t.lastNode] |= plant::kNodeDead;
+      p.tips.clear();
+      log::warn("plant \"{}\" reached max_segments ({}): growth stopped; raise the species' max_segments to grow "
+                "further",
+                p.def.name, p.def.species.maxSegments);
+    }
+  }
+  ++step_;
+}
+
+bool ClimbSystem::finished() const {
+  for (const auto& p : plants_)
+    if (!p->tips.empty()) return false;
+  return true;
+}
+
+plant::PlantModel ClimbSystem::snapshot(uint32_t id) const {
+  const Plant& p = *plants_.at(id);
+  plant::PlantModel m = p.model;
+  for (size_t i = 0; i < m.nodeCount(); ++i) m.age[i] = float(step_ - p.birthStep[i]) * stepTime_;
+  for (const Tip& t : p.tips)
+    if (t.lastNode >= 0) m.flags[t.lastNode] |= plant::kNodeApex;
+  if (p.def.species.pipeModel) {
+    // Pipe model (Shinozaki et al. 1964; seed 003's future work): a segment carries the
+    // cross-sections of everything above it, r_parent² >= Σ r_child². Children come after
+    // parents, so one reverse pass accumulates whole subtrees.
+    std::vector<float> carried(m.nodeCount(), 0.0f);
+    for (size_t i = m.nodeCount(); i-- > 0;) {
+      float r2 = std::max(m.radius[i] * m.radius[i], carried[i]);
+      m.radius[i] = std::sqrt(r2);
+      if (m.parent[i] >= 0) carried[m.parent[i]] += r2;
+    }
+  }
+  return m;
+}
+
+ClimbStats ClimbSystem::stats(uint32_t id) const {
+  const Plant& p = *plants_.at(id);
+  ClimbStats s;
+  s.segments = p.model.nodeCount();
+  s.leaves = p.model.leafCount();
+  s.aliveTips = p.tips.size();
+  for (uint32_t f : p.model.flags)
+    if (f & plant::kNodeClimbing) ++s.climbingSegments;
+  return s;
+}
+
+ClimbStats ClimbSystem::stats() const {
+  ClimbStats s;
+  for (uint32_t i = 0; i < plants_.size(); ++i) {
+    ClimbStats t = stats(i);
+    s.segments += t.segments;
+    s.leaves += t.leaves;
+    s.aliveTips += t.aliveTips;
+    s.climbingSegments += t.climbingSegments;
+  }
+  return s;
+}
+
+}  // namespace tendril::climb

@@ -1,0 +1,94 @@
+// Climbing growth after seed 003 ("Procedural generation of climbing plants using
+// L-systems"): tips extend their branch by one internode segment per step and rules from
+// Program 1 / Table 1 turn, shrink, branch, leaf and kill them. The Environment answers every
+// geometric question (Embree BVH), which keeps growth nearly flat in the triangle count.
+//
+// All climbing plants of a scene grow together so that they see each other's crowding. Tips
+// are processed in parallel; each writes only its own outcome and draws random numbers keyed
+// by (seed, plant, tip, step, purpose), and outcomes are merged in tip order — so the result
+// is bit-identical for any thread count.
+#pragma once
+
+#include "tendril/climb/occupancy.h"
+#include "tendril/climb/species.h"
+#include "tendril/env/environment.h"
+#include "tendril/plant/plant_model.h"
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace tendril::climb {
+
+struct ClimbPlantDef {
+  std::string name;
+  ClimbSpecies species;
+  Vec3 position = Vec3::Zero();        // seed point (m), must lie outside every obstacle
+  Vec3 direction = Vec3::UnitY();      // initial growth direction
+  uint64_t seed = 1;                   // the plant's own random seed
+};
+
+struct ClimbStats {
+  size_t segments = 0;
+  size_t leaves = 0;
+  size_t aliveTips = 0;
+  size_t climbingSegments = 0;
+};
+
+class ClimbSystem {
+ public:
+  // stepTime: seconds of plant age per growth step (node ages in the PlantModel).
+  explicit ClimbSystem(uint64_t sceneSeed = 1, float stepTime = 1.0f);
+
+  // Throws Error when the seed point lies inside an obstacle.
+  uint32_t addPlant(const ClimbPlantDef& def, const env::Environment& env);
+  size_t plantCount() const { return plants_.size(); }
+  const ClimbPlantDef& plantDef(uint32_t id) const { return plants_[id]->def; }
+
+  // One growth step of every plant (Program 1 for every live tip).
+  void step(const env::Environment& env);
+  uint32_t stepCount() const { return step_; }
+  // True when no plant has a live tip left.
+  bool finished() const;
+
+  // The plant as a PlantModel (ages filled in, pipe model applied if the species asks).
+  plant::PlantModel snapshot(uint32_t plant) const;
+  ClimbStats stats() const;
+  ClimbStats stats(uint32_t plant) const;
+
+ private:
+  struct Tip {
+    uint64_t id = 0;
+    int32_t lastNode = -1;  // node this tip's next segment hangs from
+    Vec3 position = Vec3::Zero();
+    Vec3 dir = Vec3::UnitY();
+    Vec3 normal = Vec3::UnitZ();  // frame hint: away from the support surface
+    float length = 0, radius = 0, leafSize = 0;
+    Vec3 shootStart = Vec3::Zero();  // (radius, length, leaf size) at the shoot's base
+    uint32_t segments = 0;
+    uint32_t unsupported = 0;  // segments in a row grown without support
+    uint16_t order = 0;
+    bool startsBranch = false;
+  };
+  struct Plant {
+    ClimbPlantDef def;
+    uint32_t id = 0;
+    plant::PlantModel model;
+    std::vector<uint32_t> birthStep;
+    std::vector<Tip> tips;
+    uint64_t nextTipId = 0;
+    bool capped = false;
+  };
+  struct Outcome;
+
+  void growTip(const Plant& plant, const Tip& tip, const env::Environment& env, Outcome& out) const;
+
+  uint64_t sceneSeed_;
+  float stepTime_;
+  uint32_t step_ = 0;
+  std::vector<std::unique_ptr<Plant>> plants_;
+  OccupancyGrid occupancy_;
+};
+
+}  // namespace tendril::climb

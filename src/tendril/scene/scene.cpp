@@ -1,0 +1,271 @@
+#include "tendril/scene/scene.h"
+
+#include "tendril/core/embedded.h"
+#include "tendril/core/error.h"
+#include "tendril/core/json_reader.h"
+#include "tendril/env/mesh_import.h"
+#include "tendril/env/primitives.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <set>
+
+namespace tendril::scene {
+
+namespace {
+
+constexpr const char* kSpeciesDir = "species/";
+
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string s;
+  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
+  return s;
+}
+
+// Reads a species document (a preset or a user file) into `s`.
+void readSpeciesDocument(const Json& json, const std::string& source, const std::filesystem::path& dir,
+                         climb::ClimbSpecies& s) {
+  JsonObject o(json, source);
+  std::string model = o.choice("model", "climb", {"climb"});
+  (void)model;
+  climb::readClimbSpecies(o, s, dir.string());
+  o.finish();
+}
+
+climb::ClimbSpecies speciesFromReference(const std::string& ref, const std::filesystem::path& baseDir,
+                                         const std::string& source, const std::string& pointer) {
+  bool isPath = ref.find('/') != std::string::npos || (ref.size() > 5 && ref.compare(ref.size() - 5, 5, ".json") == 0);
+  climb::ClimbSpecies s;
+  if (!isPath) {
+    const EmbeddedFile* f = findEmbeddedFile(kSpeciesDir + ref + ".json");
+    if (!f)
+      throw Error(source, pointer,
+                  fmt::format("unknown species \"{}\" (built-in: {}; or give a path to a .json file)", ref,
+                              joinNames(builtinSpeciesNames())));
+    std::string name = "<built-in>/" + std::string(f->path);
+    readSpeciesDocument(parseJson(f->contents, name), name, "", s);
+    return s;
+  }
+  std::filesystem::path p = std::filesystem::path(ref).is_absolute() ? std::filesystem::path(ref) : baseDir / ref;
+  if (!std::filesystem::exists(p)) throw Error(source, pointer, fmt::format("species file {} does not exist", p.string()));
+  readSpeciesDocument(readJsonFile(p), p.string(), p.parent_path(), s);
+  return s;
+}
+
+RigidTransform readTransform(JsonObject& o) {
+  RigidTransform t;
+  t.translation = o.vec3("position", Vec3::Zero());
+  t.rotation = quatFromEulerDegrees(o.vec3("rotation", Vec3::Zero(), -3600.0, 3600.0));
+  return t;
+}
+
+env::ObstacleDef readObstacle(JsonObject& o, const std::filesystem::path& baseDir, size_t index) {
+  env::ObstacleDef d;
+  std::string type = o.choice("type", "", {"plane", "box", "sphere", "cylinder", "wall", "mesh"});
+  if (!o.has("type")) throw o.error("type", "is required: one of plane, box, sphere, cylinder, wall, mesh");
+  d.name = o.string("name", fmt::format("{}{}", type, index));
+  d.source = o.source();
+  d.worldFromLocal = readTransform(o);
+  d.color = o.vec3("color", d.color, 0.0, 1.0);
+  d.sdfCell = o.numberf("sdf_cell", 0.0f, 0.0, 10.0);
+  if (type == "plane") {
+    d.kind = env::ObstacleKind::Plane;
+    d.mesh = env::makePlane(o.vec2("size", Vec2(20, 20), 1e-3, 1e5), o.numberf("thickness", 0.2f, 1e-3, 100.0));
+  } else if (type == "box") {
+    d.kind = env::ObstacleKind::Box;
+    d.mesh = env::makeBox(o.vec3("size", Vec3(1, 1, 1), 1e-4, 1e5));
+  } else if (type == "sphere") {
+    d.kind = env::ObstacleKind::Sphere;
+    d.mesh = env::makeSphere(o.numberf("radius", 0.5f, 1e-4, 1e5), int(o.integer("subdivisions", 4, 0, 7)));
+  } else if (type == "cylinder") {
+    d.kind = env::ObstacleKind::Cylinder;
+    d.mesh = env::makeCylinder(o.numberf("radius", 0.5f, 1e-4, 1e5), o.numberf("height", 1.0f, 1e-4, 1e5),
+                               int(o.integer("segments", 48, 3, 4096)));
+  } else if (type == "wall") {
+    d.kind = env::ObstacleKind::Wall;
+    Vec3 size = o.vec3("size", Vec3(4, 3, 0.25f), 1e-4, 1e5);
+    std::vector<env::WallOpening> openings;
+    for (JsonObject& w : o.objectArray("openings")) {
+      env::WallOpening op;
+      if (!w.has("center")) throw w.error("center", "is required ([x, y] on the wall, m)");
+      if (!w.has("size")) throw w.error("size", "is required ([width, height], m)");
+      op.center = w.vec2("center", Vec2::Zero());
+      op.size = w.vec2("size", Vec2::Zero(), 1e-4, 1e5);
+      w.finish();
+      openings.push_back(op);
+    }
+    std::string bad = env::checkWallOpenings(size, openings);
+    if (!bad.empty()) throw o.error("openings", bad);
+    d.mesh = env::makeWall(size, openings);
+  } else {
+    d.kind = env::ObstacleKind::Mesh;
+    if (!o.has("path")) throw o.error("path", "is required for a mesh obstacle (a mesh file Assimp reads)");
+    std::filesystem::path p = o.string("path", "");
+    if (p.is_relative()) p = baseDir / p;
+    d.source = p.lexically_normal().string();
+    d.mesh = env::loadMeshFile(p.lexically_normal());
+    // Scale is baked into the mesh; the obstacle keeps a rigid transform (DESIGN: SDFs move
+    // with the obstacle's rigid transform).
+    Vec3 scale = Vec3::Ones();
+    if (const Json* s = o.find("scale")) {
+      if (s->is_number()) scale = Vec3::Constant(o.numberf("scale", 1.0f, 1e-6, 1e6));
+      else scale = o.vec3("scale", Vec3::Ones(), 1e-6, 1e6);
+    }
+    for (Vec3& v : d.mesh.positions) v = v.cwiseProduct(scale);
+  }
+  o.finish();
+  return d;
+}
+
+env::Light readLight(JsonObject& o) {
+  env::Light l;
+  std::string type = o.choice("type", "directional", {"directional", "point"});
+  if (type == "directional") {
+    l.type = env::Light::Type::Directional;
+    l.direction = o.direction("direction", Vec3(-0.3f, -1.0f, -0.4f));
+  } else {
+    l.type = env::Light::Type::Point;
+    if (!o.has("position")) throw o.error("position", "is required for a point light");
+    l.position = o.vec3("position", Vec3::Zero());
+  }
+  l.intensity = o.numberf("intensity", 1.0f, 0.0, 1e6);
+  l.angularRadius = o.angle("angle", 0.0f, 0.0, 45.0);
+  l.samples = int(o.integer("samples", l.angularRadius > 0.0f ? 8 : 1, 1, 256));
+  o.finish();
+  return l;
+}
+
+env::Stroke readStroke(JsonObject& o) {
+  env::Stroke s;
+  std::string kind = o.choice("kind", "attract", {"attract", "repel"});
+  s.attract = kind == "attract";
+  s.radius = o.numberf("radius", 0.3f, 1e-4, 1e3);
+  s.strength = o.numberf("strength", 1.0f, 0.0, 100.0);
+  const Json* pts = o.find("points");
+  if (!pts || !pts->is_array() || pts->empty())
+    throw o.error("points", "is required: a non-empty array of [x, y, z] points");
+  for (size_t i = 0; i < pts->size(); ++i) {
+    const Json& p = (*pts)[i];
+    std::string ptr = o.pointerTo("points") + "/" + std::to_string(i);
+    if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number())
+      throw Error(o.source(), ptr, "expected [x, y, z], got " + describeJson(p));
+    Vec3 v(p[0].get<float>(), p[1].get<float>(), p[2].get<float>());
+    if (!isFinite(v)) throw Error(o.source(), ptr, "point is not finite");
+    s.points.push_back(v);
+  }
+  o.finish();
+  return s;
+}
+
+PlantSpec readPlant(JsonObject& o, const std::filesystem::path& baseDir, size_t index) {
+  PlantSpec p;
+  p.pointer = o.pointer();
+  p.name = o.string("name", fmt::format("plant{}", index));
+  p.model = o.choice("model", "climb", {"climb"});
+  if (!o.has("position")) throw o.error("position", "is required (the seed point, [x, y, z] in m)");
+  p.position = o.vec3("position", Vec3::Zero());
+  p.direction = o.direction("direction", Vec3::UnitY());
+  p.seed = o.seed("seed", index + 1);
+  const Json* sp = o.find("species");
+  if (!sp) {
+    p.climbSpecies = speciesFromReference("japanese-ivy", baseDir, o.source(), o.pointerTo("species"));
+  } else if (sp->is_string()) {
+    p.climbSpecies = speciesFromReference(sp->get<std::string>(), baseDir, o.source(), o.pointerTo("species"));
+  } else if (sp->is_object()) {
+    // Inline species: {"base": "<preset or file>", ...fields overriding it}.
+    JsonObject so(*sp, o.source(), o.pointerTo("species"));
+    std::string base = so.string("base", "japanese-ivy");
+    p.climbSpecies = speciesFromReference(base, baseDir, o.source(), so.pointerTo("base"));
+    climb::readClimbSpecies(so, p.climbSpecies, baseDir.string());
+    so.finish();
+  } else {
+    throw o.error("species", "expected a species name, a .json path or an object, got " + describeJson(*sp));
+  }
+  o.finish();
+  return p;
+}
+
+}  // namespace
+
+std::vector<std::string> builtinSpeciesNames() {
+  std::vector<std::string> names;
+  for (const EmbeddedFile& f : embeddedFiles()) {
+    std::string_view path = f.path;
+    if (path.rfind(kSpeciesDir, 0) == 0 && path.size() > 5 && path.substr(path.size() - 5) == ".json")
+      names.emplace_back(path.substr(8, path.size() - 8 - 5));
+  }
+  return names;
+}
+
+climb::ClimbSpecies loadClimbSpecies(const std::string& nameOrPath, const std::filesystem::path& baseDir) {
+  return speciesFromReference(nameOrPath, baseDir, "species", "");
+}
+
+Scene parseScene(const Json& json, const std::string& source, const std::filesystem::path& baseDir) {
+  JsonObject root(json, source);
+  Scene scene;
+  scene.source = source;
+  if (!root.has("tendril"))
+    throw root.error("tendril", fmt::format("is required: the scene format version (this build reads {})",
+                                            kSceneFormatVersion));
+  int64_t version = root.integer("tendril", 0, 0, 1000000);
+  if (version != kSceneFormatVersion)
+    throw root.error("tendril", fmt::format("scene format version {} is not supported (this build reads {})",
+                                            version, kSceneFormatVersion));
+  scene.seed = root.seed("seed", 1);
+  scene.steps = int(root.integer("steps", scene.steps, 0, 10000000));
+  scene.stepTime = root.numberf("step_time", scene.stepTime, 1e-6, 1e9);
+
+  if (auto e = root.optionalObject("environment")) {
+    std::vector<JsonObject> obstacles = e->objectArray("obstacles");
+    std::set<std::string> names;
+    for (size_t i = 0; i < obstacles.size(); ++i) {
+      scene.obstacles.push_back(readObstacle(obstacles[i], baseDir, i));
+      if (!names.insert(scene.obstacles.back().name).second)
+        throw Error(source, obstacles[i].pointerTo("name"),
+                    fmt::format("obstacle name \"{}\" is used twice", scene.obstacles.back().name));
+    }
+    for (JsonObject& l : e->objectArray("lights")) scene.lights.push_back(readLight(l));
+    for (JsonObject& s : e->objectArray("strokes")) scene.strokes.push_back(readStroke(s));
+    if (auto w = e->optionalObject("wind")) {
+      scene.wind = w->vec3("velocity", Vec3::Zero(), -1e3, 1e3);
+      w->finish();
+    }
+    e->finish();
+  }
+  std::vector<JsonObject> plants = root.objectArray("plants");
+  std::set<std::string> plantNames;
+  for (size_t i = 0; i < plants.size(); ++i) {
+    scene.plants.push_back(readPlant(plants[i], baseDir, i));
+    if (!plantNames.insert(scene.plants.back().name).second)
+      throw Error(source, plants[i].pointerTo("name"),
+                  fmt::format("plant name \"{}\" is used twice", scene.plants.back().name));
+  }
+  if (auto o = root.optionalObject("output")) {
+    scene.output.radialSegments = int(o->integer("radial_segments", scene.output.radialSegments, 3, 64));
+    scene.output.subdivisions = int(o->integer("subdivisions", scene.output.subdivisions, 1, 16));
+    scene.output.includeObstacles = o->boolean("include_obstacles", scene.output.includeObstacles);
+    o->finish();
+  }
+  root.finish();
+  return scene;
+}
+
+Scene loadScene(const std::filesystem::path& path) {
+  if (!std::filesystem::exists(path)) throw Error(path.string(), "", "scene file does not exist");
+  Json json = readJsonFile(path);
+  Scene scene = parseScene(json, path.string(), path.parent_path());
+  scene.path = path;
+  return scene;
+}
+
+void populateEnvironment(const Scene& scene, env::Environment& env) {
+  for (const env::ObstacleDef& o : scene.obstacles) env.addObstacle(o);
+  for (const env::Light& l : scene.lights) env.addLight(l);
+  for (const env::Stroke& s : scene.strokes) env.addStroke(s);
+  env.setWind(scene.wind);
+  env.commit();
+}
+
+}  // namespace tendril::scene

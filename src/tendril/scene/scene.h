@@ -1,0 +1,62 @@
+// Scene files (JSON, documented in docs/scene-format.md): the environment (obstacles from
+// primitives and mesh files, lights, strokes, wind), the plants and how to write them out.
+// Reading is strict: any unknown key, wrong type or out-of-range value is an Error naming the
+// file and the JSON pointer; a missing or broken mesh names its path.
+#pragma once
+
+#include "tendril/climb/species.h"
+#include "tendril/core/json_reader.h"
+#include "tendril/env/environment.h"
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace tendril::scene {
+
+inline constexpr int kSceneFormatVersion = 1;
+
+struct PlantSpec {
+  std::string name;
+  std::string model = "climb";  // growth model: "climb"
+  std::string pointer;          // JSON pointer of the plant in the scene file, for messages
+  Vec3 position = Vec3::Zero();
+  Vec3 direction = Vec3::UnitY();
+  uint64_t seed = 1;
+  climb::ClimbSpecies climbSpecies;  // model == "climb"
+};
+
+struct OutputSettings {
+  int radialSegments = 8;       // around each branch
+  int subdivisions = 3;         // spline samples per segment
+  bool includeObstacles = false;  // write the obstacles into the exported files too
+};
+
+struct Scene {
+  std::filesystem::path path;  // the file it came from ("" for built-in/in-memory scenes)
+  std::string source;          // how errors name it: the path, or what parseScene was told
+  uint64_t seed = 1;
+  int steps = 300;            // growth steps run by `tendril grow`
+  float stepTime = 1.0f;      // plant age per growth step (s)
+  std::vector<env::ObstacleDef> obstacles;
+  std::vector<env::Light> lights;
+  std::vector<env::Stroke> strokes;
+  Vec3 wind = Vec3::Zero();
+  std::vector<PlantSpec> plants;
+  OutputSettings output;
+};
+
+// Reads and checks a scene file (meshes are loaded here, so their errors surface now).
+Scene loadScene(const std::filesystem::path& path);
+// Parses scene JSON; `source` names it in errors, `baseDir` resolves relative paths.
+Scene parseScene(const Json& json, const std::string& source, const std::filesystem::path& baseDir);
+
+// Fills an environment with the scene's obstacles, lights, strokes and wind, and commits it.
+void populateEnvironment(const Scene& scene, env::Environment& env);
+
+// Species presets compiled in from examples/species/*.json.
+std::vector<std::string> builtinSpeciesNames();
+// A climbing-model species by built-in name or .json path (relative to baseDir).
+climb::ClimbSpecies loadClimbSpecies(const std::string& nameOrPath, const std::filesystem::path& baseDir);
+
+}  // namespace tendril::scene

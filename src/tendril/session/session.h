@@ -1,0 +1,48 @@
+// A Session owns one open scene: its Environment, every plant of every model, and the clock.
+// Apps (CLI, studio) drive a Session; they never reach around it.
+#pragma once
+
+#include "tendril/climb/climb_system.h"
+#include "tendril/env/environment.h"
+#include "tendril/plant/plant_model.h"
+#include "tendril/scene/scene.h"
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace tendril::session {
+
+class Session {
+ public:
+  // Builds the environment and seeds every plant. Throws Error for seeds inside obstacles.
+  explicit Session(scene::Scene scene);
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+
+  const scene::Scene& scene() const { return scene_; }
+  env::Environment& environment() { return *env_; }
+  const env::Environment& environment() const { return *env_; }
+
+  // One growth step of every plant.
+  void step();
+  // Up to `steps` steps, stopping early when nothing grows any more. `onStep(done)` is called
+  // after each step (progress reports).
+  void run(uint32_t steps, const std::function<void(uint32_t)>& onStep = {});
+  uint32_t stepCount() const { return steps_; }
+  bool finished() const;
+
+  // Snapshots of every plant, in scene order.
+  std::vector<plant::PlantModel> plants() const;
+  size_t segmentCount() const;
+
+ private:
+  scene::Scene scene_;
+  std::unique_ptr<env::Environment> env_;
+  climb::ClimbSystem climb_;
+  std::vector<uint32_t> climbIds_;  // per scene plant
+  uint32_t steps_ = 0;
+};
+
+}  // namespace tendril::session
