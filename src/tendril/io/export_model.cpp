@@ -1,12 +1,16 @@
 #include "tendril/io/export_model.h"
 
 #include "tendril/core/error.h"
+#include "tendril/core/parallel.h"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
 #include <filesystem>
+
+#include <tbb/parallel_invoke.h>
 
 namespace tendril::io {
 namespace {
@@ -26,16 +30,43 @@ std::string textureLabel(const std::string& spec) {
   return std::filesystem::path(spec).stem().string();
 }
 
+// Every texture spec the scene's plants may use, each once, in order of first use.
+std::vector<std::string> textureSpecs(const ExportScene& scene) {
+  std::vector<std::string> specs;
+  auto add = [&](const std::string& spec) {
+    if (!spec.empty() && std::find(specs.begin(), specs.end(), spec) == specs.end()) specs.push_back(spec);
+  };
+  for (const plant::PlantModel& p : scene.plants) {
+    if (p.nodeCount() > 0) add(p.bark.texture);
+    std::vector<uint8_t> used(mesh::leafShapeCount(p), 0);
+    for (uint16_t s : p.leafShape) used[s] = 1;
+    for (size_t s = 0; s < used.size(); ++s)
+      if (used[s]) add(mesh::leafShapeFor(p, s).texture);
+    for (const plant::Primitive& pr : p.primitives)
+      if (pr.mesh < p.meshes.size()) add(p.meshes[pr.mesh].texture);
+  }
+  return specs;
+}
+
 class ModelBuilder {
  public:
-  explicit ModelBuilder(ExportModel& model) : model_(model) {}
+  ModelBuilder(ExportModel& model, std::vector<std::string>& specs, std::vector<EncodedImage>& loaded,
+               std::vector<std::exception_ptr>& failed)
+      : model_(model), specs_(specs), loaded_(loaded), failed_(failed) {}
 
   int texture(const std::string& spec, bool repeat) {
     int image = -1;
     for (size_t i = 0; i < model_.images.size(); ++i)
       if (model_.images[i].spec == spec) image = static_cast<int>(i);
     if (image < 0) {
-      model_.images.push_back({spec, loadEncodedTexture(spec)});
+      auto it = std::find(specs_.begin(), specs_.end(), spec);
+      if (it == specs_.end()) {
+        model_.images.push_back({spec, loadEncodedTexture(spec)});
+      } else {
+        size_t k = static_cast<size_t>(it - specs_.begin());
+        if (failed_[k]) std::rethrow_exception(failed_[k]);  // reported where first used
+        model_.images.push_back({spec, std::move(loaded_[k])});
+      }
       image = static_cast<int>(model_.images.size() - 1);
     }
     for (size_t t = 0; t < model_.textures.size(); ++t)
@@ -64,6 +95,9 @@ class ModelBuilder {
                        [&](const ExportMaterial& o) { return o.name == name; });
   }
   ExportModel& model_;
+  std::vector<std::string>& specs_;     // preloaded textures ...
+  std::vector<EncodedImage>& loaded_;  // ... moved out on first use
+  std::vector<std::exception_ptr>& failed_;
 };
 
 // Obstacles and other extra meshes: checked, with unit normals.
@@ -89,14 +123,32 @@ TriangleMesh preparedMesh(const NamedMesh& named) {
 
 ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& options) {
   ExportModel model;
-  model.plantMeshes.reserve(scene.plants.size());
-  for (const plant::PlantModel& p : scene.plants) model.plantMeshes.push_back(mesh::buildPlantMesh(p, options.mesh));
+  // Textures load (or are generated) while the plants are meshed: both take a while for a
+  // large scene and neither needs the other.
+  std::vector<std::string> specs = textureSpecs(scene);
+  std::vector<EncodedImage> loaded(specs.size());
+  std::vector<std::exception_ptr> failed(specs.size());
+  tbb::parallel_invoke(
+      [&] {
+        model.plantMeshes.resize(scene.plants.size());
+        for (size_t i = 0; i < scene.plants.size(); ++i)
+          model.plantMeshes[i] = mesh::buildPlantMesh(scene.plants[i], options.mesh);
+      },
+      [&] {
+        parallelFor(0, specs.size(), [&](size_t i) {
+          try {
+            loaded[i] = loadEncodedTexture(specs[i]);
+          } catch (...) {
+            failed[i] = std::current_exception();
+          }
+        }, 1);
+      });
   model.extraMeshes.reserve(scene.meshes.size());
   for (const NamedMesh& m : scene.meshes) model.extraMeshes.push_back(preparedMesh(m));
 
   // Materials and textures are created when a non-empty part needs them, so that nothing in
   // the file is unused.
-  ModelBuilder builder(model);
+  ModelBuilder builder(model, specs, loaded, failed);
   for (size_t i = 0; i < scene.plants.size(); ++i) {
     const plant::PlantModel& p = scene.plants[i];
     const mesh::PlantMesh& pm = model.plantMeshes[i];

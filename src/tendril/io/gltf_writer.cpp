@@ -4,42 +4,19 @@
 #include "tendril/core/parallel.h"
 #include "tendril/io/atomic_file.h"
 
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include <algorithm>
 #include <cstring>
 #include <limits>
-#include <ostream>
-#include <streambuf>
+#include <sstream>
 
 namespace tendril::io {
 namespace {
 
 constexpr int kArrayBuffer = TINYGLTF_TARGET_ARRAY_BUFFER;
 constexpr int kElementArrayBuffer = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
-
-// An std::ostream over an AtomicFileWriter, for tinygltf's stream writer. Errors thrown by the
-// writer propagate (the stream's badbit exception is enabled by the caller).
-class WriterStreamBuf : public std::streambuf {
- public:
-  explicit WriterStreamBuf(AtomicFileWriter& writer) : writer_(writer) {}
-
- protected:
-  std::streamsize xsputn(const char* s, std::streamsize n) override {
-    writer_.write(s, static_cast<size_t>(n));
-    return n;
-  }
-  int_type overflow(int_type c) override {
-    if (!traits_type::eq_int_type(c, traits_type::eof())) {
-      char ch = traits_type::to_char_type(c);
-      writer_.write(&ch, 1);
-    }
-    return traits_type::not_eof(c);
-  }
-
- private:
-  AtomicFileWriter& writer_;
-};
 
 // One piece of the binary chunk, filled in parallel with the others.
 struct CopyJob {
@@ -52,40 +29,45 @@ struct CopyJob {
 
 size_t align4(size_t n) { return (n + 3) & ~size_t(3); }
 
-void runJob(const CopyJob& job, uint8_t* buffer, size_t begin, size_t end) {
+// Writes one buffer view's bytes: straight from the mesh arrays, or converted a block at a
+// time (glTF uvs, 16-bit indices) so that no copy of the whole binary chunk is ever made.
+void writeJob(const CopyJob& job, AtomicFileWriter& out, std::vector<uint8_t>& scratch) {
+  constexpr size_t kBlock = size_t(1) << 15;
   switch (job.kind) {
     case CopyJob::Kind::Bytes:
-      std::memcpy(buffer + job.offset + begin, static_cast<const uint8_t*>(job.source) + begin, end - begin);
-      break;
+      out.write(job.source, job.count);
+      return;
     case CopyJob::Kind::FlipUv: {
       const Vec2* uv = static_cast<const Vec2*>(job.source);
-      float* out = reinterpret_cast<float*>(buffer + job.offset);
-      for (size_t i = begin; i < end; ++i) {
-        out[2 * i] = uv[i].x();
-        out[2 * i + 1] = 1.0f - uv[i].y();
+      scratch.resize(kBlock * sizeof(Vec2));
+      for (size_t b = 0; b < job.count; b += kBlock) {
+        size_t n = std::min(kBlock, job.count - b);
+        float* f = reinterpret_cast<float*>(scratch.data());
+        for (size_t i = 0; i < n; ++i) {
+          f[2 * i] = uv[b + i].x();
+          f[2 * i + 1] = 1.0f - uv[b + i].y();
+        }
+        out.write(scratch.data(), n * sizeof(Vec2));
       }
-      break;
+      return;
     }
     case CopyJob::Kind::Index16: {
       const uint32_t* idx = static_cast<const uint32_t*>(job.source);
-      uint16_t* out = reinterpret_cast<uint16_t*>(buffer + job.offset);
-      for (size_t i = begin; i < end; ++i) out[i] = static_cast<uint16_t>(idx[i]);
-      break;
+      scratch.resize(kBlock * sizeof(uint16_t));
+      for (size_t b = 0; b < job.count; b += kBlock) {
+        size_t n = std::min(kBlock, job.count - b);
+        uint16_t* o = reinterpret_cast<uint16_t*>(scratch.data());
+        for (size_t i = 0; i < n; ++i) o[i] = static_cast<uint16_t>(idx[b + i]);
+        out.write(scratch.data(), n * sizeof(uint16_t));
+      }
+      return;
     }
   }
 }
 
-// Splits every job into pieces of about kPiece items and runs all pieces in parallel.
-void runJobs(const std::vector<CopyJob>& jobs, uint8_t* buffer) {
-  constexpr size_t kPiece = size_t(1) << 16;
-  struct Piece {
-    size_t job, begin, end;
-  };
-  std::vector<Piece> pieces;
-  for (size_t j = 0; j < jobs.size(); ++j)
-    for (size_t b = 0; b < jobs[j].count; b += kPiece) pieces.push_back({j, b, std::min(jobs[j].count, b + kPiece)});
-  parallelFor(0, pieces.size(), [&](size_t p) { runJob(jobs[pieces[p].job], buffer, pieces[p].begin, pieces[p].end); },
-              1);
+void writeU32(AtomicFileWriter& out, uint32_t v) {
+  uint8_t b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};  // little-endian
+  out.write(b, 4);
 }
 
 Bounds3 parallelBounds(const std::vector<Vec3>& points) {
@@ -246,24 +228,46 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
     gltf.images.push_back(std::move(image));
   }
 
-  if (builder.size() > std::numeric_limits<uint32_t>::max() - 1024)
-    throw Error(path.string(), "", "cannot write .glb: the binary data exceeds the format's 4 GiB limit; "
-                                   "lower radialSegments or subdivisions");
-  if (builder.size() > 0) {
-    tinygltf::Buffer buffer;
-    buffer.data.resize(builder.size());  // zero-filled: alignment padding is deterministic
-    runJobs(jobs, buffer.data.data());
-    gltf.buffers.push_back(std::move(buffer));
-  }
-
-  AtomicFileWriter writer(path);
-  WriterStreamBuf buf(writer);
-  std::ostream stream(&buf);
-  stream.exceptions(std::ios::badbit);
+  // tinygltf serialises the glTF JSON; the one buffer (the GLB's BIN chunk) is added here
+  // and the container written directly, streaming every view from the meshes, so that the
+  // geometry is never copied into a second in-memory buffer (hundreds of MB for a large plant).
+  std::ostringstream text;
   tinygltf::TinyGLTF tiny;
-  if (!tiny.WriteGltfSceneToStream(&gltf, stream, false, true) || !stream)
-    throw Error(path.string(), "", "cannot write .glb: tinygltf failed");
-  writer.commit();
+  if (!tiny.WriteGltfSceneToStream(&gltf, text, false, false))
+    throw Error(path.string(), "", "cannot write .glb: tinygltf could not serialise the scene");
+  nlohmann::json json = nlohmann::json::parse(text.str());
+  size_t binBytes = builder.size();
+  if (binBytes > 0) json["buffers"] = nlohmann::json::array({{{"byteLength", binBytes}}});
+  std::string content = json.dump();
+  content.resize(align4(content.size()), ' ');  // the JSON chunk is padded with spaces
+  uint64_t total = 12 + 8 + content.size() + (binBytes > 0 ? 8 + binBytes : 0);
+  if (total > std::numeric_limits<uint32_t>::max())
+    throw Error(path.string(), "", "cannot write .glb: more than the format's 4 GiB; lower radialSegments or "
+                                   "subdivisions");
+
+  AtomicFileWriter out(path);
+  out.write("glTF", 4);
+  writeU32(out, 2);
+  writeU32(out, static_cast<uint32_t>(total));
+  writeU32(out, static_cast<uint32_t>(content.size()));
+  out.write("JSON", 4);
+  out.write(content);
+  if (binBytes > 0) {
+    writeU32(out, static_cast<uint32_t>(binBytes));
+    out.write("BIN\0", 4);
+    std::vector<uint8_t> scratch;
+    static const uint8_t kZeros[4] = {0, 0, 0, 0};
+    uint64_t at = 0;
+    for (const CopyJob& job : jobs) {  // in offset order
+      out.write(kZeros, job.offset - at);
+      writeJob(job, out, scratch);
+      at = job.offset + (job.kind == CopyJob::Kind::FlipUv    ? job.count * sizeof(Vec2)
+                         : job.kind == CopyJob::Kind::Index16 ? job.count * sizeof(uint16_t)
+                                                              : job.count);
+    }
+    out.write(kZeros, binBytes - at);
+  }
+  out.commit();
 }
 
 void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options) {

@@ -1,4 +1,5 @@
-// glTF 2.0 binary export (.glb) through tinygltf.
+// glTF 2.0 binary export (.glb). tinygltf builds and serialises the glTF JSON; the binary
+// chunk is streamed straight from the meshes into the file (no second copy of the geometry).
 //
 // One scene; one node per plant (named after it) and per extra mesh. A plant's mesh has one
 // primitive per part: "bark" (PBR metallic-roughness, the bark texture repeating), one per

@@ -120,10 +120,13 @@ void sampleChain(const PlantModel& plant, std::span<const int32_t> nodes, const 
 void emitRing(const RingSample& s, const RingTable& table, int radial, size_t vertex, const MeshSpans& out) {
   Vec3 binormal = s.tangent.cross(s.normal);
   float invRadial = 1.0f / static_cast<float>(radial);
+  // dir ⟂ tangent and |dir| = 1, so |dir − slope·tangent| = sqrt(1 + slope²) for the whole ring.
+  float invLength = 1.0f / std::sqrt(1.0f + s.slope * s.slope);
+  Vec3 tilt = (s.slope * invLength) * s.tangent;
   for (int j = 0; j < radial; ++j) {
     Vec3 dir = ringDirection(s, binormal, table, j);
     out.positions[vertex + j] = s.centre + s.radius * dir;
-    out.normals[vertex + j] = (dir - s.slope * s.tangent).normalized();
+    out.normals[vertex + j] = invLength * dir - tilt;
     out.uvs[vertex + j] = Vec2(static_cast<float>(j) * invRadial, s.v);
   }
   // The seam vertex repeats the first one with u = 1 so u interpolates continuously.
