@@ -17,6 +17,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 
@@ -231,6 +232,23 @@ TEST(IoGlb, BadTextureIsAnErrorAndTheOldFileSurvives) {
   } catch (const Error& e) {
     EXPECT_EQ(e.source(), (dir / "nope" / "scene.glb").string());
   }
+}
+
+TEST(IoExportModel, RejectsColoursThatAreNotFinite) {
+  ExportScene scene = testScene();
+  scene.plants[0].leafShapes[2].tint.y() = std::numeric_limits<float>::quiet_NaN();
+  try {
+    buildExportModel(scene, ExportOptions{});
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.source(), "tree");
+    EXPECT_EQ(e.location(), "leaf shape 2");
+  }
+  // Out-of-range colours are clamped into glTF's [0, 1].
+  scene = testScene();
+  scene.plants[0].leafShapes[0].tint = Vec3(2.0f, -1.0f, 0.5f);
+  ExportModel model = buildExportModel(scene, ExportOptions{});
+  EXPECT_EQ(model.materials[model.objects[0].parts[1].material].baseColor, Vec4(1.0f, 0.0f, 0.5f, 1.0f));
 }
 
 TEST(IoGlb, FileTexturesAreEmbedded) {

@@ -106,6 +106,15 @@ TEST(MeshPlant, RejectsBadPlantsAndOptions) {
   o = MeshOptions{};
   o.subdivisions = 0;
   EXPECT_THROW(buildPlantMesh(meshtest::straightChain(3), o), Error);
+  PlantModel flat = meshtest::straightChain(3);
+  meshtest::addLeaves(flat, 2);
+  flat.leafShapes[1].aspect = 0.0f;
+  try {
+    buildPlantMesh(flat);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.location(), "leaf shape 1");
+  }
 }
 
 TEST(MeshPlant, EmptyPlantGivesEmptyMeshes) {

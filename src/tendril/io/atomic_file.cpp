@@ -16,6 +16,7 @@ namespace tendril::io {
 namespace {
 
 constexpr size_t kBufferBytes = size_t(1) << 20;
+constexpr size_t kDirectBytes = size_t(1) << 16;  // writes this large skip the buffer
 
 std::atomic<uint64_t> gTempCounter{0};
 
@@ -74,18 +75,14 @@ void AtomicFileWriter::write(const void* data, size_t bytes) {
   if (fd_ < 0 || committed_) throw Error(path_.string(), "", "cannot write: the file is already closed");
   written_ += bytes;
   const char* p = static_cast<const char*>(data);
-  if (buffered_ + bytes <= kBufferBytes) {
+  if (bytes < kDirectBytes) {
+    if (buffered_ + bytes > kBufferBytes) flushBuffer();
     std::memcpy(buffer_.get() + buffered_, p, bytes);
     buffered_ += bytes;
     return;
   }
-  flushBuffer();
-  if (bytes < kBufferBytes) {
-    std::memcpy(buffer_.get(), p, bytes);
-    buffered_ = bytes;
-    return;
-  }
   // Large blocks go straight to the kernel, without another copy.
+  flushBuffer();
   while (bytes > 0) {
     ssize_t n = ::write(fd_, p, bytes);
     if (n < 0) {

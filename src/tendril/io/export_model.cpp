@@ -17,7 +17,10 @@ namespace {
 
 using Kind = ExportMaterial::Kind;
 
-Vec4 clampedColor(const Vec3& rgb) {
+// glTF needs colour factors in [0, 1]; NaN (which no clamp removes) is an Error.
+Vec4 clampedColor(const Vec3& rgb, const std::string& source, const std::string& what) {
+  if (!isFinite(rgb))
+    throw Error(source, what, fmt::format("colour must be finite, got ({}, {}, {})", rgb.x(), rgb.y(), rgb.z()));
   Vec3 c = rgb.cwiseMax(0.0f).cwiseMin(1.0f);
   return Vec4(c.x(), c.y(), c.z(), 1.0f);
 }
@@ -158,9 +161,11 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       ExportMaterial m;
       m.kind = Kind::Bark;
       m.name = "bark";
+      if (!std::isfinite(p.bark.roughness))
+        throw Error(object.name, "bark", fmt::format("roughness must be finite, got {}", p.bark.roughness));
       m.roughness = clamp01(p.bark.roughness);
       if (p.bark.texture.empty()) {
-        m.baseColor = clampedColor(p.bark.color);
+        m.baseColor = clampedColor(p.bark.color, object.name, "bark");
       } else {
         m.texture = builder.texture(p.bark.texture, true);  // the texture carries the colour
       }
@@ -172,7 +177,7 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       ExportMaterial m;
       m.kind = Kind::Leaf;
       m.name = "leaf-" + textureLabel(shape.texture);
-      m.baseColor = clampedColor(shape.tint);
+      m.baseColor = clampedColor(shape.tint, object.name, fmt::format("leaf shape {}", s));
       m.roughness = 0.5f;  // a glossy cuticle
       m.texture = builder.texture(shape.texture, false);
       m.alphaMask = true;
@@ -183,7 +188,7 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       if (g.mesh.empty()) continue;
       ExportMaterial m;
       m.name = g.name.empty() ? std::string("primitive") : g.name;
-      m.baseColor = clampedColor(g.color);
+      m.baseColor = clampedColor(g.color, object.name, "primitive " + m.name);
       m.roughness = 0.8f;
       if (!g.texture.empty()) m.texture = builder.texture(g.texture, true);
       object.parts.push_back({m.name, &g.mesh, builder.material(m)});
@@ -197,7 +202,7 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
     if (!model.extraMeshes[i].empty()) {
       ExportMaterial m;
       m.name = object.name;
-      m.baseColor = clampedColor(n.color);
+      m.baseColor = clampedColor(n.color, object.name, "colour");
       m.roughness = 0.8f;
       object.parts.push_back({object.name, &model.extraMeshes[i], builder.material(std::move(m))});
     }

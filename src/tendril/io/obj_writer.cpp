@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cctype>
 #include <charconv>
+#include <cstring>
 
 namespace tendril::io {
 namespace {
@@ -21,32 +22,36 @@ std::string safeName(const std::string& name) {
   return s;
 }
 
-// Appends text lines to a string without iostreams; floats in their shortest exact form.
+// Builds one text line in a fixed buffer (numbers by std::to_chars; floats in their shortest
+// exact form) and appends it to a string in one go.
 class LineWriter {
  public:
   explicit LineWriter(std::string& out) : out_(out) {}
-  void text(std::string_view s) { out_.append(s); }
-  void number(float v) {
-    char buf[32];
-    auto r = std::to_chars(buf, buf + sizeof(buf), v == 0.0f ? 0.0f : v);  // no "-0"
-    out_.append(buf, r.ptr);
+  void text(std::string_view s) {
+    std::memcpy(end_, s.data(), s.size());
+    end_ += s.size();
   }
-  void integer(uint64_t v) {
-    char buf[24];
-    auto r = std::to_chars(buf, buf + sizeof(buf), v);
-    out_.append(buf, r.ptr);
-  }
+  void number(float v) { end_ = std::to_chars(end_, line_ + kMax, v == 0.0f ? 0.0f : v).ptr; }  // no "-0"
+  void integer(uint64_t v) { end_ = std::to_chars(end_, line_ + kMax, v).ptr; }
   void vec(std::string_view tag, const float* v, int n) {
-    out_.append(tag);
+    text(tag);
     for (int i = 0; i < n; ++i) {
-      out_.push_back(' ');
+      *end_++ = ' ';
       number(v[i]);
     }
-    out_.push_back('\n');
+    endLine();
+  }
+  void endLine() {
+    *end_++ = '\n';
+    out_.append(line_, end_);
+    end_ = line_;
   }
 
  private:
+  static constexpr size_t kMax = 192;  // "f" + 3 × (3 × 20 digits + 2 slashes + space)
   std::string& out_;
+  char line_[kMax];
+  char* end_ = line_;
 };
 
 // Formats items [0, count) with `format(i, LineWriter&)` in parallel chunks and writes them
@@ -62,6 +67,7 @@ void writeFormatted(AtomicFileWriter& file, size_t count, F&& format) {
     parallelFor(0, n, [&](size_t k) {
       std::string& s = text[k];
       s.clear();
+      s.reserve(kChunk * 48);
       LineWriter w(s);
       size_t begin = (first + k) * kChunk, end = std::min(count, begin + kChunk);
       for (size_t i = begin; i < end; ++i) format(i, w);
@@ -152,7 +158,7 @@ void writeObj(const ExportModel& model, const std::filesystem::path& path) {
           }
           w.integer(v);
         }
-        w.text("\n");
+        w.endLine();
       });
       base += m.positions.size();
     }
