@@ -20,6 +20,16 @@ TEST(MeshCurve, CatmullRomInterpolatesItsPoints) {
   }
 }
 
+TEST(MeshCurve, CoincidentPointsStayFinite) {
+  Vec3 p(1000.0f, 2.0f, -3.0f);
+  CurveSegment c = centripetalCatmullRom(p, p, p, p);
+  EXPECT_TRUE(isFinite(c.point(0.5f)));
+  EXPECT_TRUE(isFinite(c.derivative(0.5f)));
+  c = centripetalCatmullRom(p, p, p + Vec3(0, 1, 0), p + Vec3(0, 1, 0));
+  EXPECT_TRUE(isFinite(c.point(0.5f)));
+  EXPECT_LT((c.point(1.0f) - (p + Vec3(0, 1, 0))).norm(), 1e-4f);
+}
+
 TEST(MeshCurve, CollinearPointsGiveAStraightSegment) {
   CurveSegment c = centripetalCatmullRom(Vec3(0, 0, 0), Vec3(0, 1, 0), Vec3(0, 3, 0), Vec3(0, 3.1f, 0));
   for (float s = 0.0f; s <= 1.0f; s += 0.125f) {

@@ -1,5 +1,6 @@
 #include "tendril/mesh/curve.h"
 
+#include <algorithm>
 #include <cassert>
 
 namespace tendril::mesh {
@@ -27,10 +28,12 @@ CurveSegment centripetalCatmullRom(const Vec3& p0, const Vec3& p1, const Vec3& p
   // Knot intervals |p_{i+1} − p_i|^alpha with alpha = 1/2 (centripetal). The Hermite tangents
   // of the non-uniform Catmull-Rom segment (Yuksel et al. 2011), rescaled to the unit
   // parameter of [p1, p2].
-  float t01 = std::sqrt((p1 - p0).norm());
-  float t12 = std::sqrt((p2 - p1).norm());
-  float t23 = std::sqrt((p3 - p2).norm());
-  assert(t01 > 0.0f && t12 > 0.0f && t23 > 0.0f);
+  // The floor only guards against rounding (e.g. a reflected end point that collapses onto
+  // its neighbour far from the origin): a zero interval then contributes a zero difference.
+  constexpr float kMinInterval = 1e-20f;
+  float t01 = std::max(std::sqrt((p1 - p0).norm()), kMinInterval);
+  float t12 = std::max(std::sqrt((p2 - p1).norm()), kMinInterval);
+  float t23 = std::max(std::sqrt((p3 - p2).norm()), kMinInterval);
   CurveSegment c;
   c.p1 = p1;
   c.p2 = p2;

@@ -27,8 +27,8 @@ struct CurveSegment {
 };
 
 // The centripetal Catmull-Rom segment between p1 and p2, shaped by the neighbours p0 and p3.
-// Consecutive points must be distinct (callers merge coincident points first); the result is
-// then finite. At a curve's ends pass the reflected neighbour, 2·p1 − p2 (or 2·p2 − p1).
+// p1 and p2 should be distinct (callers merge coincident points first); the result is finite
+// even when they are not. At a curve's ends pass the reflected neighbour, 2·p1 − p2 (or 2·p2 − p1).
 CurveSegment centripetalCatmullRom(const Vec3& p0, const Vec3& p1, const Vec3& p2, const Vec3& p3);
 
 // Carries the unit normal r0 of the frame at (x0, t0) to the frame at (x1, t1) by two
