@@ -24,13 +24,18 @@ std::string errnoText(int err) { return std::strerror(err); }
 
 }  // namespace
 
-AtomicFileWriter::AtomicFileWriter(std::filesystem::path path) : path_(std::move(path)) {
-  std::filesystem::path dir = path_.parent_path();
+void checkOutputPath(const std::filesystem::path& path) {
+  std::filesystem::path dir = path.parent_path();
   std::error_code ec;
-  if (path_.filename().empty()) throw Error(path_.string(), "", "cannot write: not a file name");
+  if (path.filename().empty()) throw Error(path.string(), "", "cannot write: not a file name");
   if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
-    throw Error(path_.string(), "", fmt::format("cannot write: directory {} does not exist", dir.string()));
-  if (std::filesystem::is_directory(path_, ec)) throw Error(path_.string(), "", "cannot write: it is a directory");
+    throw Error(path.string(), "", fmt::format("cannot write: directory {} does not exist", dir.string()));
+  if (std::filesystem::is_directory(path, ec)) throw Error(path.string(), "", "cannot write: it is a directory");
+}
+
+AtomicFileWriter::AtomicFileWriter(std::filesystem::path path) : path_(std::move(path)) {
+  checkOutputPath(path_);
+  std::filesystem::path dir = path_.parent_path();
   // A hidden name in the same directory (rename() is atomic only within a file system),
   // unique per process and writer.
   temp_ = dir / fmt::format(".{}.{}-{}.tmp", path_.filename().string(), static_cast<long>(::getpid()),

@@ -47,6 +47,10 @@ class AtomicFileWriter {
   size_t buffered_ = 0;
 };
 
+// Throws the Error a writer for `path` would throw for a missing directory or a path that
+// names a directory; writers call it before long work so that the user hears at once.
+void checkOutputPath(const std::filesystem::path& path);
+
 void writeFileAtomic(const std::filesystem::path& path, std::span<const uint8_t> bytes);
 void writeFileAtomic(const std::filesystem::path& path, std::string_view text);
 

@@ -8,6 +8,7 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <bit>
 #include <cstring>
 #include <limits>
 #include <sstream>
@@ -18,7 +19,10 @@ namespace {
 constexpr int kArrayBuffer = TINYGLTF_TARGET_ARRAY_BUFFER;
 constexpr int kElementArrayBuffer = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
 
-// One piece of the binary chunk, filled in parallel with the others.
+// Mesh arrays are written as they are in memory; GLB is little-endian.
+static_assert(std::endian::native == std::endian::little, "the .glb writer assumes a little-endian host");
+
+// The content of one buffer view; views are written in offset order.
 struct CopyJob {
   enum class Kind { Bytes, FlipUv, Index16 };
   Kind kind = Kind::Bytes;
@@ -271,6 +275,7 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
 }
 
 void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options) {
+  checkOutputPath(path);
   writeGlb(buildExportModel(scene, options), path);
 }
 

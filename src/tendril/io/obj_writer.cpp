@@ -83,10 +83,7 @@ std::string extensionFor(const std::string& mime) { return mime == "image/jpeg" 
 void writeObj(const ExportModel& model, const std::filesystem::path& path) {
   std::filesystem::path dir = path.parent_path();
   std::string stem = path.stem().string();
-  if (stem.empty()) throw Error(path.string(), "", "cannot write .obj: not a file name");
-  std::error_code ec;
-  if (!dir.empty() && !std::filesystem::is_directory(dir, ec))
-    throw Error(path.string(), "", fmt::format("cannot write: directory {} does not exist", dir.string()));
+  checkOutputPath(path);
 
   // File names of the images, by the role of the first material using them.
   std::vector<std::string> imageFile(model.images.size());
@@ -167,6 +164,7 @@ void writeObj(const ExportModel& model, const std::filesystem::path& path) {
 }
 
 void writeObj(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options) {
+  checkOutputPath(path);
   writeObj(buildExportModel(scene, options), path);
 }
 
