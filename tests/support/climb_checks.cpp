@@ -34,11 +34,11 @@ ClimbReport checkClimbingPlant(const plant::PlantModel& p, const env::Environmen
     Vec3 attach = p.leafWorldPosition(i);
     Vec3 c[4];
     leafCorners(p, i, c);
-    // Inside an obstacle, or on the far side of a surface from the attachment point (the
-    // blade passes through it): both are "behind the surface" for a user.
+    // A corner inside an obstacle, or a blade whose outline passes through a surface, or that
+    // cannot be reached from its attachment point without crossing one (it is behind it).
+    if (env.countSegmentHits(attach, c[0]) > 0) r.leafCornersBehind += 4;
     for (int k = 0; k < 4; ++k) {
-      bool behind = env.exactSignedDistance(c[k], 1.0f) < 0.0f || env.countSegmentHits(attach, c[k]) > 0 ||
-                    env.countSegmentHits(c[k], c[(k + 1) % 4]) > 0;
+      bool behind = env.exactSignedDistance(c[k], 1.0f) < 0.0f || env.countSegmentHits(c[k], c[(k + 1) % 4]) > 0;
       if (behind) ++r.leafCornersBehind;
     }
     // A clinging leaf (within reach of a surface) shows its upper side to the world, away

@@ -16,7 +16,7 @@ struct ClimbReport {
   size_t climbingSegments = 0;      // segments at or after the first climbing segment of their path
   size_t nearSurface = 0;           // ... of which have their midpoint within the adhesion distance
   size_t leaves = 0;
-  size_t leafCornersBehind = 0;     // corners inside an obstacle, or whose blade passes through a surface
+  size_t leafCornersBehind = 0;     // corners inside an obstacle, on a blade outline through a surface, or unreachable
   size_t leavesFacingSurface = 0;   // clinging blades whose upper side faces their support
   double nearFraction() const { return climbingSegments ? double(nearSurface) / climbingSegments : 0.0; }
 };

@@ -20,13 +20,15 @@ constexpr uint64_t kPurposeBranch = purposeId("climb.branch");
 constexpr uint64_t kPurposeLeaf = purposeId("climb.leaf");
 constexpr uint64_t kPurposeHold = purposeId("climb.hold");
 
-// Where a new segment may go: the end point and direction after collision avoidance.
+// Where a new segment may go: the end point and direction after collision avoidance, and the
+// closest surface within `reach` of the end (the tip's support at the next step).
 struct Avoided {
   bool ok = false;
   Vec3 end = Vec3::Zero();
   Vec3 dir = Vec3::Zero();
   Vec3 normal = Vec3::Zero();  // away from the surface that was hit last, if any
   bool hit = false;
+  std::optional<env::SurfacePoint> endSupport;
 };
 
 // Seed 003 §3.5, eq. 5: a tip about to grow into an obstacle is turned parallel to the hit
@@ -34,7 +36,8 @@ struct Avoided {
 // the segment end at least `offset` from every surface — the role of eq. 5's translation,
 // which moves the tip to the intersection point: a branch of radius r must not sink into the
 // wall it climbs, and rays must not start on a surface.
-Avoided avoidCollisions(const env::Environment& env, const Vec3& p, Vec3 d, float len, float offset, Vec3 normal) {
+Avoided avoidCollisions(const env::Environment& env, const Vec3& p, Vec3 d, float len, float offset, float reach,
+                        Vec3 normal, const env::SurfacePoint* hint) {
   Avoided out;
   for (int attempt = 0; attempt < 6; ++attempt) {
     if (auto hit = env.rayCast(p, d, len + offset)) {
@@ -53,7 +56,8 @@ Avoided avoidCollisions(const env::Environment& env, const Vec3& p, Vec3 d, floa
       continue;
     }
     Vec3 end = p + d * len;
-    if (auto sp = env.closestPoint(end, offset)) {
+    std::optional<env::SurfacePoint> sp = env.closestPoint(end, std::max(reach, offset), hint);
+    if (sp && sp->distance < offset) {
       end = sp->point + sp->away * offset;
       Vec3 seg = end - p;
       float l = seg.norm();
@@ -63,16 +67,15 @@ Avoided avoidCollisions(const env::Environment& env, const Vec3& p, Vec3 d, floa
         d = nd;
         continue;
       }
-      out.ok = true;
-      out.end = end;
-      out.dir = nd;
-      out.normal = normal;
-      return out;
+      d = nd;
+      // Pushed straight out along `away`: the same surface point, now exactly `offset` away.
+      sp->distance = offset;
     }
     out.ok = true;
     out.end = end;
     out.dir = d;
     out.normal = normal;
+    if (sp && sp->distance <= reach) out.endSupport = sp;
     return out;
   }
   return out;
@@ -103,6 +106,9 @@ struct ClimbSystem::Outcome {
 };
 
 ClimbSystem::ClimbSystem(uint64_t sceneSeed, float stepTime) : sceneSeed_(sceneSeed), stepTime_(stepTime) {}
+ClimbSystem::~ClimbSystem() = default;
+ClimbSystem::ClimbSystem(ClimbSystem&&) noexcept = default;
+ClimbSystem& ClimbSystem::operator=(ClimbSystem&&) noexcept = default;
 
 uint32_t ClimbSystem::addPlant(const ClimbPlantDef& def, const env::Environment& env) {
   const ClimbSpecies& s = def.species;
@@ -128,8 +134,13 @@ uint32_t ClimbSystem::addPlant(const ClimbPlantDef& def, const env::Environment&
     p = sp->point + sp->away * s.surfaceOffset;
     tip.normal = sp->away;
   }
-  if (auto sp = env.closestPoint(p, s.adhesionDistance)) tip.normal = sp->away;
+  tip.support = env.closestPoint(p, s.adhesionDistance);
+  if (tip.support) tip.normal = tip.support->away;
   tip.position = p;
+  // Crowding queries are cheapest with cells twice the largest crowding radius.
+  float cell = 2.0f * s.crowdingRadius;
+  for (const auto& other : plants_) cell = std::max(cell, 2.0f * other->def.species.crowdingRadius);
+  if (cell > 0.0f) occupancy_.setCell(cell);
   tip.radius = s.radius;
   tip.length = s.segmentLength;
   tip.leafSize = s.leafSize;
@@ -145,9 +156,13 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   auto rng = [&](uint64_t purpose) { return Rng(RandomKey{seed, plant.id, tip.id, step_, purpose}); };
   Tip t = tip;
 
-  // Climbing state (seed 003 §3.6): is a support surface within reach of the tip?
-  std::optional<env::SurfacePoint> support =
-      env.closestPointFacing(t.position, s.adhesionDistance, t.dir, std::cos(s.releaseAngle));
+  // Climbing state (seed 003 §3.6): is a support surface within reach of the tip? The closest
+  // surface was found when the previous segment ended here; surfaces the tip grows away from
+  // do not hold it, so only when that one faces the growth direction is a filtered search due.
+  const float cosRelease = std::cos(s.releaseAngle);
+  std::optional<env::SurfacePoint> support = t.support;
+  if (support && support->away.dot(t.dir) > cosRelease)
+    support = env.closestPointFacing(t.position, s.adhesionDistance, t.dir, cosRelease);
   const bool climbing = support.has_value();
   if (climbing) t.normal = support->away;
   t.unsupported = climbing ? 0 : t.unsupported + 1;
@@ -162,33 +177,40 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   // Program 1: Tip -> segment(Tip) Tip.
   Vec3 end = t.position + t.dir * t.length;
   Vec3 dir = t.dir;
+  std::optional<env::SurfacePoint> endSupport;
+  const env::SurfacePoint* hint = t.support ? &*t.support : nullptr;
   if (avoid) {
-    Avoided a = avoidCollisions(env, t.position, t.dir, t.length, s.surfaceOffset, t.normal);
+    Avoided a = avoidCollisions(env, t.position, t.dir, t.length, s.surfaceOffset, s.adhesionDistance, t.normal, hint);
     if (!a.ok) {  // boxed in: nowhere to grow
       out.dies = true;
       return;
     }
     end = a.end;
     dir = a.dir;
+    endSupport = a.endSupport;
     if (a.hit) t.normal = a.normal;
     // Hold on: a climbing tip whose segment would end out of reach of every surface bends
     // back toward the nearest one (over an edge, round a corner), unless it breaks free.
-    if (climbing && s.surfaceHold > 0.0f && !env.closestPoint(end, s.adhesionDistance) &&
-        rng(kPurposeHold).bernoulli(s.surfaceHold)) {
+    if (climbing && !endSupport && s.surfaceHold > 0.0f && rng(kPurposeHold).bernoulli(s.surfaceHold)) {
       if (auto q = env.closestPoint(end, t.length + s.adhesionDistance)) {
         Vec3 target = q->point + q->away * s.surfaceOffset - t.position;
         if (target.squaredNorm() > 1e-10f) {
-          Avoided b = avoidCollisions(env, t.position, target.normalized(), t.length, s.surfaceOffset, q->away);
+          Avoided b = avoidCollisions(env, t.position, target.normalized(), t.length, s.surfaceOffset,
+                                      s.adhesionDistance, q->away, &*q);
           if (b.ok) {
             end = b.end;
             dir = b.dir;
+            endSupport = b.endSupport;
             t.normal = b.hit ? b.normal : q->away;
           }
         }
       }
     }
+  } else {
+    endSupport = env.closestPoint(end, s.adhesionDistance, hint);
   }
-  if (s.crowdingRadius > 0.0f && occupancy_.countWithin(end, s.crowdingRadius, s.crowdingLimit) >= s.crowdingLimit) {
+  int crowd = s.crowdingRadius > 0.0f ? occupancy_.countWithin(end, s.crowdingRadius, s.crowdingLimit) : 0;
+  if (s.crowdingRadius > 0.0f && crowd >= s.crowdingLimit) {
     out.dies = true;  // the plant already covers this spot
     return;
   }
@@ -209,6 +231,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   t.position = end;
   t.dir = dir;
   t.segments += 1;
+  t.support = endSupport;
 
   // The rules of Table 1, in the species' order.
   for (size_t ri = 0; ri < s.rules.size() && !out.dies; ++ri) {
@@ -253,7 +276,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
         // Blades lie parallel to the surface nearest to them, upper side away from it (seed
         // 003 §3.10); in free air they turn toward the light (seed 000 §4.3).
         Vec3 leafUp = frame.col(2);
-        if (auto near = env.closestPoint(attach, s.adhesionDistance)) {
+        if (auto near = env.closestPoint(attach, s.adhesionDistance, endSupport ? &*endSupport : nullptr)) {
           leafUp = near->away;
         } else if (s.light > 0.0f) {
           Vec3 toLight = env.light(attach).nominal;
@@ -262,54 +285,68 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
         // The blade's base direction: the growth direction laid into the blade's plane.
         const Quat worldFromBlade = frameFromYZ(dir - leafUp * leafUp.dot(dir), leafUp);
         const Quat nodeFromBlade = node.orientation.conjugate() * worldFromBlade;
+        struct Blade {
+          Quat nodeFromLeaf;
+          Mat3 frame;
+          uint16_t shape;
+          float aspect;
+        } blades[2];
         for (int side = 0; side < 2; ++side) {
           float angle = (side == 0 ? 1.0f : -1.0f) * (s.leafSpread + s.leafJitter * lr.uniform(-1.0f, 1.0f));
-          Quat nodeFromLeaf = (nodeFromBlade * axisAngle(Vec3::UnitZ(), angle)).normalized();
-          uint16_t shape = static_cast<uint16_t>(lr.below(uint32_t(s.leafShapes.size())));
-          float aspect = s.leafShapes[shape].aspect;
-          Mat3 leafFrame = (node.orientation * nodeFromLeaf).toRotationMatrix();
-          // Fit the blade to the surroundings (seed 003 §3.10 lays blades parallel to the
-          // support): shrink it until no corner is behind a surface, or drop it.
-          for (float scale : {1.0f, 0.7f, 0.45f}) {
-            float size = t.leafSize * scale;
-            float petiole = s.leafPetiole * scale;
-            float halfWidth = 0.5f * size * aspect;
-            const Vec3 corners[4] = {
-                attach + leafFrame * Vec3(-halfWidth, petiole, 0), attach + leafFrame * Vec3(halfWidth, petiole, 0),
-                attach + leafFrame * Vec3(halfWidth, petiole + size, 0),
-                attach + leafFrame * Vec3(-halfWidth, petiole + size, 0)};
-            // The blade must not pass through a surface: rays from the attachment to every
-            // corner and along every edge.
-            bool clear = true;
-            for (int k = 0; k < 4 && clear; ++k) {
-              for (const Vec3& from : {attach, corners[(k + 3) % 4]}) {
-                Vec3 d = corners[k] - from;
-                float len = d.norm();
-                if (len > 0.0f && env.rayCast(from, d / len, len)) {
-                  clear = false;
-                  break;
-                }
+          Blade& b = blades[side];
+          b.nodeFromLeaf = (nodeFromBlade * axisAngle(Vec3::UnitZ(), angle)).normalized();
+          b.shape = static_cast<uint16_t>(lr.below(uint32_t(s.leafShapes.size())));
+          b.aspect = s.leafShapes[b.shape].aspect;
+          b.frame = (node.orientation * b.nodeFromLeaf).toRotationMatrix();
+        }
+        // The blade must not pass through a surface. One closed path of segments per blade,
+        // attachment -> c0 -> c1 -> c2 -> c3 -> c0, touching nothing: then every corner is
+        // reached from the attachment without crossing a surface (none lies behind one) and
+        // all four blade edges are clear. Blades that do not fit shrink, or are dropped.
+        auto path = [&](const Blade& b, float scale, Vec3* from, Vec3* to) {
+          float size = t.leafSize * scale, petiole = s.leafPetiole * scale, hw = 0.5f * size * b.aspect;
+          const Vec3 c[4] = {attach + b.frame * Vec3(-hw, petiole, 0), attach + b.frame * Vec3(hw, petiole, 0),
+                             attach + b.frame * Vec3(hw, petiole + size, 0),
+                             attach + b.frame * Vec3(-hw, petiole + size, 0)};
+          from[0] = attach;
+          to[0] = c[0];
+          for (int k = 0; k < 4; ++k) {
+            from[k + 1] = c[k];
+            to[k + 1] = c[(k + 1) % 4];
+          }
+        };
+        float fitted[2] = {0.0f, 0.0f};
+        Vec3 from[10], to[10];
+        path(blades[0], 1.0f, from, to);
+        path(blades[1], 1.0f, from + 5, to + 5);
+        if (!env.anySegmentBlocked(from, to, 10)) {
+          fitted[0] = fitted[1] = 1.0f;  // the common case: both blades fit as they are
+        } else {
+          for (int side = 0; side < 2; ++side)
+            for (float scale : {1.0f, 0.7f, 0.45f}) {
+              path(blades[side], scale, from, to);
+              if (!env.anySegmentBlocked(from, to, 5)) {
+                fitted[side] = scale;
+                break;
               }
             }
-            if (!clear) continue;
-            plant::PlantModel::LeafDef& leaf = out.leaves[out.leafCount++];
-            leaf.offset = attachLocal;
-            leaf.rotation = nodeFromLeaf;
-            leaf.size = size;
-            leaf.petiole = petiole;
-            leaf.thickness = s.leafThickness;
-            leaf.shape = shape;
-            break;
-          }
+        }
+        for (int side = 0; side < 2; ++side) {
+          if (fitted[side] == 0.0f) continue;
+          plant::PlantModel::LeafDef& leaf = out.leaves[out.leafCount++];
+          leaf.offset = attachLocal;
+          leaf.rotation = blades[side].nodeFromLeaf;
+          leaf.size = t.leafSize * fitted[side];
+          leaf.petiole = s.leafPetiole * fitted[side];
+          leaf.thickness = s.leafThickness;
+          leaf.shape = blades[side].shape;
         }
         if (out.leafCount > 0) node.flags |= plant::kNodeLeafNode;
         break;
       }
       case RuleKind::Branch: {
         // Seed 003 §3.7: a node at the splitting point and a new tip turned 35–40° away.
-        if (s.crowdingRadius > 0.0f &&
-            occupancy_.countWithin(end, s.crowdingRadius, s.crowdingLimit) >= std::max(1, s.crowdingLimit / 2))
-          break;
+        if (s.crowdingRadius > 0.0f && crowd >= std::max(1, s.crowdingLimit / 2)) break;
         Rng br = rng(kPurposeBranch);
         float angle = br.uniform(s.branchAngleMin, s.branchAngleMax) * (br.bernoulli(0.5f) ? 1.0f : -1.0f);
         // Climbing shoots branch within the surface plane; free ones about a random axis.
@@ -325,6 +362,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
         b.leafSize = b.shootStart.z();
         b.order = static_cast<uint16_t>(t.order + 1);
         b.unsupported = t.unsupported;
+        b.support = endSupport;
         b.startsBranch = true;
         out.branch = true;
         out.branchTip = b;
@@ -337,27 +375,24 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
 
 void ClimbSystem::step(const env::Environment& env) {
   // Gather every live tip of every plant; grow them in parallel into their own outcomes.
-  struct Ref {
-    uint32_t plant;
-    uint32_t tip;
-  };
-  std::vector<Ref> refs;
+  refs_.clear();
   for (const auto& p : plants_)
-    for (uint32_t i = 0; i < p->tips.size(); ++i) refs.push_back({p->id, i});
-  std::vector<Outcome> outcomes(refs.size());
-  parallelFor(0, refs.size(), [&](size_t i) {
-    const Plant& p = *plants_[refs[i].plant];
-    growTip(p, p.tips[refs[i].tip], env, outcomes[i]);
+    for (uint32_t i = 0; i < p->tips.size(); ++i) refs_.push_back({p->id, i});
+  outcomes_.resize(refs_.size());
+  parallelFor(0, refs_.size(), [&](size_t i) {
+    const Plant& p = *plants_[refs_[i].plant];
+    outcomes_[i] = Outcome();
+    growTip(p, p.tips[refs_[i].tip], env, outcomes_[i]);
   }, 8);
 
   // Merge in tip order: node and tip ids depend only on the order, never on the threads.
   size_t k = 0;
   for (auto& pp : plants_) {
     Plant& p = *pp;
-    std::vector<Tip> next;
-    next.reserve(p.tips.size() + 8);
+    std::vector<Tip>& next = nextTips_;
+    next.clear();
     for (uint32_t i = 0; i < p.tips.size(); ++i, ++k) {
-      Outcome& o = outcomes[k];
+      Outcome& o = outcomes_[k];
       int32_t nodeIndex = p.tips[i].lastNode;
       if (o.addNode) {
         o.node.parent = p.tips[i].lastNode;
@@ -381,7 +416,7 @@ void ClimbSystem::step(const env::Environment& env) {
         next.push_back(o.branchTip);
       }
     }
-    p.tips = std::move(next);
+    p.tips.swap(next);
     if (!p.capped && p.model.nodeCount() >= size_t(p.def.species.maxSegments)) {
       p.capped = true;
       for (const Tip& t : p.tips)

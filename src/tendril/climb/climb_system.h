@@ -40,6 +40,9 @@ class ClimbSystem {
  public:
   // stepTime: seconds of plant age per growth step (node ages in the PlantModel).
   explicit ClimbSystem(uint64_t sceneSeed = 1, float stepTime = 1.0f);
+  ~ClimbSystem();
+  ClimbSystem(ClimbSystem&&) noexcept;
+  ClimbSystem& operator=(ClimbSystem&&) noexcept;
 
   // Throws Error when the seed point lies inside an obstacle.
   uint32_t addPlant(const ClimbPlantDef& def, const env::Environment& env);
@@ -68,6 +71,9 @@ class ClimbSystem {
     Vec3 shootStart = Vec3::Zero();  // (radius, length, leaf size) at the shoot's base
     uint32_t segments = 0;
     uint32_t unsupported = 0;  // segments in a row grown without support
+    // The closest surface within the adhesion distance of `position` (unfiltered), if any:
+    // computed when the previous segment ended there.
+    std::optional<env::SurfacePoint> support;
     uint16_t order = 0;
     bool startsBranch = false;
   };
@@ -81,6 +87,10 @@ class ClimbSystem {
     bool capped = false;
   };
   struct Outcome;
+  struct TipRef {
+    uint32_t plant;
+    uint32_t tip;
+  };
 
   void growTip(const Plant& plant, const Tip& tip, const env::Environment& env, Outcome& out) const;
 
@@ -89,6 +99,10 @@ class ClimbSystem {
   uint32_t step_ = 0;
   std::vector<std::unique_ptr<Plant>> plants_;
   OccupancyGrid occupancy_;
+  // Per-step scratch, kept to avoid reallocating every step.
+  std::vector<TipRef> refs_;
+  std::vector<Outcome> outcomes_;
+  std::vector<Tip> nextTips_;
 };
 
 }  // namespace tendril::climb

@@ -13,7 +13,10 @@ namespace tendril::climb {
 
 class OccupancyGrid {
  public:
-  explicit OccupancyGrid(float cell = 0.05f) : cell_(cell > 0.0f ? cell : 0.05f) {}
+  // Queries are fastest for radii up to cell / 2: a sphere then touches at most 8 cells.
+  explicit OccupancyGrid(float cell = 0.12f) : cell_(cell > 0.0f ? cell : 0.12f) {}
+  // Changes the cell size (re-bins the stored points).
+  void setCell(float cell);
   void insert(const Vec3& p);
   // Number of stored points within `radius` of p, counting no further than `limit`.
   int countWithin(const Vec3& p, float radius, int limit) const;

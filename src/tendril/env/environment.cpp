@@ -53,6 +53,7 @@ struct Environment::ObstacleData {
   Pseudonormals normals;    // local frame, only when closed
   std::vector<Vec3> world;  // welded vertices in world space (+1 padding element for Embree)
   std::vector<Vec3> faceNormalWorld;
+  std::vector<uint32_t> neighbors;  // triangle adjacency (3 per triangle), for closest-point walks
   RTCGeometry geometry = nullptr;
   bool moved = true;
   mutable std::once_flag sdfOnce;
@@ -168,6 +169,53 @@ Vec3 coneSample(const Vec3& axis, float halfAngle, int i, int n) {
 
 }  // namespace
 
+// Greedy descent over the triangle adjacency from `start` toward p: while the closest feature
+// of the current triangle is an edge or vertex, step to the neighbour across it if that one is
+// strictly closer. Ends at a local minimum of the distance — usually the global one — in a few
+// steps when `start` was the answer for a nearby point. Returns the squared distance reached.
+float Environment::walkTowardClosest(const ObstacleData& o, const Vec3& p, uint32_t start) {
+  auto dist2 = [&](uint32_t t, TriangleFeature* f) {
+    const uint32_t* tri = &o.welded.indices[3 * size_t(t)];
+    ClosestOnTriangle c = closestPointOnTriangle(p, o.world[tri[0]], o.world[tri[1]], o.world[tri[2]]);
+    *f = c.feature;
+    return (c.point - p).squaredNorm();
+  };
+  uint32_t cur = start;
+  TriangleFeature f;
+  float best = dist2(cur, &f);
+  for (int step = 0; step < 64 && f != TriangleFeature::Face; ++step) {
+    const uint32_t* n = &o.neighbors[3 * size_t(cur)];
+    uint32_t candidates[2] = {kNoNeighbor, kNoNeighbor};
+    switch (f) {
+      case TriangleFeature::EdgeAB: candidates[0] = n[0]; break;
+      case TriangleFeature::EdgeBC: candidates[0] = n[1]; break;
+      case TriangleFeature::EdgeCA: candidates[0] = n[2]; break;
+      case TriangleFeature::VertexA: candidates[0] = n[0], candidates[1] = n[2]; break;
+      case TriangleFeature::VertexB: candidates[0] = n[0], candidates[1] = n[1]; break;
+      case TriangleFeature::VertexC: candidates[0] = n[1], candidates[1] = n[2]; break;
+      case TriangleFeature::Face: break;
+    }
+    uint32_t next = kNoNeighbor;
+    TriangleFeature nextFeature = f;
+    float nextBest = best;
+    for (uint32_t c : candidates) {
+      if (c == kNoNeighbor) continue;
+      TriangleFeature cf;
+      float d = dist2(c, &cf);
+      if (d < nextBest) {
+        nextBest = d;
+        next = c;
+        nextFeature = cf;
+      }
+    }
+    if (next == kNoNeighbor) break;
+    cur = next;
+    best = nextBest;
+    f = nextFeature;
+  }
+  return best;
+}
+
 Environment::Environment() : strokeGrid_(std::make_unique<StrokeGrid>()) {}
 
 Environment::~Environment() {
@@ -190,6 +238,7 @@ uint32_t Environment::addObstacle(ObstacleDef def) {
               "wound edges): its distances are unsigned, so nothing is ever 'inside' it",
               def.name, def.source, topo.boundaryEdges, topo.nonManifoldEdges, topo.inconsistentEdges);
   if (closed) o->normals = computePseudonormals(o->welded);
+  o->neighbors = triangleNeighbors(o->welded);
   o->info.name = def.name;
   o->info.kind = def.kind;
   o->info.source = def.source;
@@ -338,6 +387,42 @@ bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, floa
   return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
 }
 
+bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) const {
+  assert(!dirty_ && "Environment::commit() must be called after edits");
+  if (obstacles_.empty()) return false;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // the segments of one leaf are close together
+  for (size_t base = 0; base < n; base += 8) {
+    alignas(32) int valid[8];
+    RTCRay8 rays;
+    for (int k = 0; k < 8; ++k) {
+      size_t i = base + k;
+      Vec3 d = i < n ? Vec3(to[i] - from[i]) : Vec3::Zero();
+      float len = d.norm();
+      valid[k] = (i < n && len > 0.0f) ? -1 : 0;
+      Vec3 o = i < n ? from[i] : Vec3::Zero();
+      if (valid[k]) d /= len;
+      rays.org_x[k] = o.x();
+      rays.org_y[k] = o.y();
+      rays.org_z[k] = o.z();
+      rays.dir_x[k] = valid[k] ? d.x() : 0.0f;
+      rays.dir_y[k] = valid[k] ? d.y() : 1.0f;
+      rays.dir_z[k] = valid[k] ? d.z() : 0.0f;
+      rays.tnear[k] = 0.0f;
+      rays.tfar[k] = valid[k] ? len : 0.0f;
+      rays.time[k] = 0.0f;
+      rays.mask[k] = 0xffffffffu;
+      rays.id[k] = unsigned(k);
+      rays.flags[k] = 0;
+    }
+    rtcOccluded8(valid, static_cast<RTCScene>(scene_), &ctx, &rays);
+    for (int k = 0; k < 8; ++k)
+      if (valid[k] && rays.tfar[k] < 0.0f) return true;  // Embree sets tfar = -inf on a hit
+  }
+  return false;
+}
+
 size_t Environment::countSegmentHits(const Vec3& a, const Vec3& b) const {
   Vec3 d = b - a;
   float len = d.norm();
@@ -358,13 +443,17 @@ std::optional<SurfacePoint> Environment::closestPoint(const Vec3& p, float radiu
   return closest(p, radius, nullptr, 1.0f);
 }
 
+std::optional<SurfacePoint> Environment::closestPoint(const Vec3& p, float radius, const SurfacePoint* hint) const {
+  return closest(p, radius, nullptr, 1.0f, hint);
+}
+
 std::optional<SurfacePoint> Environment::closestPointFacing(const Vec3& p, float radius, const Vec3& direction,
                                                             float cosLimit) const {
   return closest(p, radius, &direction, cosLimit);
 }
 
 std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, const Vec3* direction,
-                                                 float cosLimit) const {
+                                                 float cosLimit, const SurfacePoint* hint) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
   if (obstacles_.empty()) return std::nullopt;
   // Geometry ids equal obstacle indices, so small per-call tables suffice.
@@ -385,8 +474,21 @@ std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, co
     verts[i] = obstacles_[i]->world.data();
     inds[i] = obstacles_[i]->welded.indices.data();
   }
-  ClosestSearch s{verts, inds, p, radius * radius, direction, cosLimit};
-  runClosest(static_cast<RTCScene>(scene_), s, radius);
+  // A hinted triangle's distance bounds the search: Embree calls back for every triangle the
+  // query sphere overlaps, so a tight sphere is far cheaper on fine meshes. The closest point
+  // lies inside that sphere, so the answer is the same as for the full radius.
+  // The hint is first improved by walking the mesh toward p, so the sphere is as tight as the
+  // true answer whenever the walk finds it.
+  float r = radius;
+  if (hint && hint->obstacle < obstacles_.size() && !direction) {
+    const ObstacleData& h = *obstacles_[hint->obstacle];
+    if (hint->triangle < h.welded.indices.size() / 3) {
+      float d = std::sqrt(walkTowardClosest(h, p, hint->triangle));
+      if (d < radius) r = std::min(radius, d * (1.0f + 1e-5f) + 1e-7f);
+    }
+  }
+  ClosestSearch s{verts, inds, p, r * r, direction, cosLimit};
+  runClosest(static_cast<RTCScene>(scene_), s, r);
   if (s.bestGeom == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   const ObstacleData& o = *obstacles_[s.bestGeom];
   SurfacePoint sp;

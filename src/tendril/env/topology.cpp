@@ -80,6 +80,30 @@ TopologyReport analyzeTopology(const WeldedMesh& m) {
   return r;
 }
 
+std::vector<uint32_t> triangleNeighbors(const WeldedMesh& m) {
+  const size_t nt = m.indices.size() / 3;
+  std::vector<uint32_t> out(3 * nt, kNoNeighbor);
+  // Every edge's triangle-edge slots; only edges with exactly two get linked.
+  struct Use {
+    uint32_t slots[2] = {kNoNeighbor, kNoNeighbor};
+    int count = 0;
+  };
+  std::unordered_map<uint64_t, Use> edges;
+  edges.reserve(3 * nt);
+  for (size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      Use& e = edges[edgeKey(m.indices[3 * t + k], m.indices[3 * t + (k + 1) % 3])];
+      if (e.count < 2) e.slots[e.count] = uint32_t(3 * t + k);
+      ++e.count;
+    }
+  for (const auto& [key, e] : edges) {
+    if (e.count != 2) continue;
+    out[e.slots[0]] = e.slots[1] / 3;
+    out[e.slots[1]] = e.slots[0] / 3;
+  }
+  return out;
+}
+
 ClosestOnTriangle closestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
   const float d1 = ab.dot(ap), d2 = ac.dot(ap);

@@ -28,6 +28,11 @@ struct TopologyReport {
 };
 TopologyReport analyzeTopology(const WeldedMesh& mesh);
 
+// For each triangle, the triangle across each of its edges AB, BC, CA (3 per triangle), or
+// kNoNeighbor on boundary and non-manifold edges.
+inline constexpr uint32_t kNoNeighbor = 0xffffffffu;
+std::vector<uint32_t> triangleNeighbors(const WeldedMesh& mesh);
+
 // Which feature of a triangle a closest point lies on.
 enum class TriangleFeature : uint8_t { Face, EdgeAB, EdgeBC, EdgeCA, VertexA, VertexB, VertexC };
 
