@@ -13,8 +13,12 @@ find_package(Threads REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(MUPARSER REQUIRED IMPORTED_TARGET muparser)
 pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)
+# Rendering: libepoxy loads the OpenGL entry points of whichever context is current (the
+# studio's GLFW window or an EGL offscreen context); EGL makes headless contexts.
+pkg_check_modules(EPOXY REQUIRED IMPORTED_TARGET epoxy)
+find_package(OpenGL REQUIRED COMPONENTS EGL)
 
 add_library(tendril_deps INTERFACE)
 target_link_libraries(tendril_deps INTERFACE
   Eigen3::Eigen embree TBB::tbb nlohmann_json::nlohmann_json assimp::assimp TinyGLTF::TinyGLTF
-  spdlog::spdlog fmt::fmt PkgConfig::MUPARSER PkgConfig::STB Threads::Threads)
+  spdlog::spdlog fmt::fmt PkgConfig::MUPARSER PkgConfig::STB PkgConfig::EPOXY OpenGL::EGL Threads::Threads)

@@ -1,0 +1,46 @@
+// Rendering a Session's current state to an image: what `tendril render` does, and what other
+// commands reuse for a `--preview out.png`.
+#pragma once
+
+#include "tendril/io/image.h"
+#include "tendril/render/camera.h"
+#include "tendril/render/render_scene.h"
+#include "tendril/session/session.h"
+
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+namespace tendril::render {
+
+// A RenderScene made from a Session, owning copies of everything it points to (plant
+// snapshots, obstacle meshes). Its focus is the plants and every obstacle but ground planes,
+// so the default camera and the shadow map frame what grows rather than the whole ground.
+class SessionScene {
+ public:
+  explicit SessionScene(const session::Session& session);
+  SessionScene(const SessionScene&) = delete;
+  SessionScene& operator=(const SessionScene&) = delete;
+
+  const RenderScene& scene() const { return scene_; }
+  // Adjustable (background, grid, gizmos); the plant and obstacle pointers must stay as made.
+  RenderScene& scene() { return scene_; }
+  const std::vector<plant::PlantModel>& plants() const { return plants_; }
+
+ private:
+  std::vector<plant::PlantModel> plants_;
+  std::vector<TriangleMesh> meshes_;
+  RenderScene scene_;
+};
+
+// Renders the session at settings.width × settings.height, from `camera` or by default from
+// defaultCamera(). Creates (and ends) its own offscreen OpenGL context; throws Error when none
+// can be made.
+io::Image renderSessionImage(const session::Session& session, const RenderSettings& settings,
+                             const std::optional<Camera>& camera = std::nullopt);
+
+// The same, written to `png` atomically (a temporary file renamed over it once complete).
+void renderScenePng(const session::Session& session, const RenderSettings& settings, const std::filesystem::path& png,
+                    const std::optional<Camera>& camera = std::nullopt);
+
+}  // namespace tendril::render

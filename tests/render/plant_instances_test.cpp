@@ -1,0 +1,152 @@
+#include "tendril/render/plant_instances.h"
+
+#include "support/synthetic_plants.h"
+#include "tendril/render/texture_layers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+namespace tendril::render {
+namespace {
+
+Vec3 xyz(const GpuVec4& v) { return Vec3(v.x, v.y, v.z); }
+
+std::vector<BranchInstance> branches(const plant::PlantModel& p, std::span<const float> stress = {}) {
+  std::vector<BranchInstance> out;
+  PlantView view;
+  view.model = &p;
+  view.stress = stress;
+  appendBranchInstances(view, 0.0f, Vec3::Ones(), out);
+  return out;
+}
+
+TEST(RenderInstances, ConsecutiveSegmentsShareTheirJointRingBitForBit) {
+  plant::PlantModel arc = meshtest::arcChain(24, 0.5f, 2.0f, 0.01f);
+  std::vector<BranchInstance> b = branches(arc);
+  ASSERT_EQ(b.size(), arc.nodeCount());
+  for (size_t i = 1; i < b.size(); ++i) {
+    // Same centre and radius, same ring plane, same angle-0 direction: no gap, no crack.
+    EXPECT_EQ(std::memcmp(&b[i].start, &b[i - 1].end, sizeof(GpuVec4)), 0) << i;
+    EXPECT_EQ(xyz(b[i].startAxis), xyz(b[i - 1].endAxis)) << i;
+    EXPECT_EQ(xyz(b[i].startRef), xyz(b[i - 1].endRef)) << i;
+    // The ring plane bisects the two segment directions (a mitre).
+    Vec3 bisector = (arc.direction(i - 1) + arc.direction(i)).normalized();
+    EXPECT_LT((xyz(b[i].startAxis) - bisector).norm(), 1e-5f);
+    EXPECT_NEAR(xyz(b[i].startRef).dot(xyz(b[i].startAxis)), 0.0f, 1e-5f);
+    // Bark v runs on along the chain.
+    EXPECT_EQ(b[i].startAxis.w, b[i - 1].startRef.w);
+  }
+  EXPECT_EQ(uint32_t(b.front().endAxis.w), kCapStart);
+  EXPECT_EQ(uint32_t(b.back().endAxis.w), kCapEnd);
+  for (size_t i = 1; i + 1 < b.size(); ++i) EXPECT_EQ(b[i].endAxis.w, 0.0f) << i;
+}
+
+TEST(RenderInstances, SpinningNodeFramesDoNotTwistTheCylinders) {
+  // Every node's frame turns 90° about its axis relative to the previous one; the angular
+  // reference is transported along the chain instead, so rings stay aligned.
+  plant::PlantModel p = meshtest::straightChain(6);
+  for (size_t i = 0; i < p.nodeCount(); ++i) p.orientation[i] = axisAngle(Vec3::UnitY(), 0.5f * kPi * float(i));
+  std::vector<BranchInstance> b = branches(p);
+  for (size_t i = 0; i < b.size(); ++i) {
+    EXPECT_LT((xyz(b[i].startRef) - xyz(b[0].startRef)).norm(), 1e-5f) << i;
+    EXPECT_LT((xyz(b[i].endRef) - xyz(b[0].startRef)).norm(), 1e-5f) << i;
+  }
+}
+
+TEST(RenderInstances, LateralBranchesStartWithTheirOwnCappedRing) {
+  plant::PlantModel tree = meshtest::branchingTree();
+  std::vector<BranchInstance> b = branches(tree);
+  // Chains [0 1 2 3 4 5], [6 7 8], [9 10], [11]: each chain start is capped and starts on its
+  // own node; each chain end is capped.
+  for (int start : {0, 6, 9, 11}) {
+    EXPECT_TRUE(uint32_t(b[size_t(start)].endAxis.w) & kCapStart) << start;
+    EXPECT_EQ(xyz(b[size_t(start)].start), tree.position[size_t(start)]) << start;
+    EXPECT_EQ(xyz(b[size_t(start)].startAxis), tree.direction(size_t(start))) << start;
+  }
+  for (int end : {5, 8, 10, 11}) EXPECT_TRUE(uint32_t(b[size_t(end)].endAxis.w) & kCapEnd) << end;
+  for (int inner : {1, 2, 3, 4, 7}) EXPECT_EQ(b[size_t(inner)].endAxis.w, 0.0f) << inner;
+  // Segments taper from their own radius to their continuing child's.
+  EXPECT_EQ(b[0].start.w, tree.radius[0]);
+  EXPECT_EQ(b[0].end.w, tree.radius[1]);
+  EXPECT_EQ(b[5].end.w, tree.radius[5]);
+}
+
+TEST(RenderInstances, StressRunsFromBlueToRedAndSelectionIsMarked) {
+  plant::PlantModel p = meshtest::straightChain(5);
+  std::vector<float> stress = {0.0f, 0.25f, 0.5f, 0.75f, 1.0f};
+  PlantView view;
+  view.model = &p;
+  view.stress = stress;
+  view.selected = {1, 2};
+  std::vector<BranchInstance> b;
+  appendBranchInstances(view, 0.0f, Vec3::Ones(), b);
+  EXPECT_GT(b[0].color.z, 3.0f * b[0].color.x);  // blue
+  EXPECT_GT(b[4].color.x, 3.0f * b[4].color.z);  // red
+  for (size_t i = 1; i < 5; ++i) EXPECT_GT(b[i].color.x, b[i - 1].color.x);
+  EXPECT_EQ(b[0].color.w, 0.0f);
+  EXPECT_EQ(b[1].color.w, 1.0f);
+  EXPECT_EQ(b[2].color.w, 1.0f);
+  EXPECT_EQ(b[3].color.w, 0.0f);
+}
+
+TEST(RenderInstances, LeafBladesFollowThePlantModelFrame) {
+  plant::PlantModel p = meshtest::straightChain(4);
+  meshtest::addLeaves(p, 2, 0.1f);
+  std::vector<float> layer = {3.0f, 5.0f}, aspect = {0.8f, 1.2f};
+  std::vector<Vec3> tint = {Vec3(1, 0.9f, 0.8f), Vec3(0.5f, 1, 0.5f)};
+  PlantView view;
+  view.model = &p;
+  std::vector<LeafInstance> out;
+  appendLeafInstances(view, layer, aspect, tint, out);
+  ASSERT_EQ(out.size(), p.leafCount());
+  for (size_t i = 0; i < out.size(); ++i) {
+    Mat3 r = p.leafWorldRotation(i).toRotationMatrix();
+    uint16_t s = p.leafShape[i];
+    Vec3 base = p.leafWorldPosition(i) + p.leafPetiole[i] * r.col(1);
+    EXPECT_LT((xyz(out[i].base) - base).norm(), 1e-6f);
+    EXPECT_NEAR(xyz(out[i].halfWidth).norm(), 0.5f * p.leafSize[i] * aspect[s], 1e-6f);
+    EXPECT_LT((xyz(out[i].along) - p.leafSize[i] * r.col(1)).norm(), 1e-6f);
+    EXPECT_EQ(out[i].halfWidth.w, layer[s]);
+    EXPECT_EQ(xyz(out[i].tint), tint[s]);
+  }
+}
+
+TEST(RenderTextures, AlphaMipmapsKeepThinLeavesFromVanishing) {
+  // Eight spokes 3 texels wide, like the leaflets of a compound leaf, on a transparent field.
+  // Box-filtered mipmaps fade such thin parts below the alpha test at 0.5, so the leaf
+  // disappears in the distance; the rescaled chain keeps its area.
+  io::Image fern = io::makeImage(128, 128, 0, 0, 0, 0);
+  for (int y = 0; y < 128; ++y)
+    for (int x = 0; x < 128; ++x) {
+      float dx = float(x) + 0.5f - 64.0f, dy = float(y) + 0.5f - 64.0f;
+      float r = std::sqrt(dx * dx + dy * dy), a = std::atan2(dy, dx);
+      float toSpoke = r * std::sin(a - std::round(a / (0.25f * kPi)) * 0.25f * kPi);
+      if (r < 60.0f && std::abs(toSpoke) < 1.5f) {
+        uint8_t* p = fern.pixel(x, y);
+        p[0] = 40;
+        p[1] = 120;
+        p[2] = 40;
+        p[3] = 255;
+      }
+    }
+  const double base = alphaCoverage(fern);
+  ASSERT_GT(base, 0.05);
+  std::vector<io::Image> chain = buildMipChain(fern, true), plain = buildMipChain(fern, false);
+  ASSERT_EQ(chain.size(), 8u);
+  EXPECT_EQ(chain.back().width, 1);
+  for (size_t level = 1; level <= 3; ++level)  // 64², 32², 16²
+    EXPECT_NEAR(alphaCoverage(chain[level]), base, 0.02) << "level " << level;
+  EXPECT_NEAR(alphaCoverage(chain[4]), base, 1.0 / 16.0) << "8²: coverage comes in steps of 1/64";
+  EXPECT_EQ(alphaCoverage(plain[4]), 0.0) << "plain box filtering loses the leaf at 8²";
+  // Colour is averaged over opaque texels only: the black transparent field does not darken it.
+  for (size_t level = 1; level <= 4; ++level) {
+    const io::Image& img = chain[level];
+    for (size_t i = 0; i < img.rgba.size(); i += 4)
+      if (img.rgba[i + 3] >= 128) ASSERT_EQ(img.rgba[i + 1], 120) << "level " << level;
+  }
+}
+
+}  // namespace
+}  // namespace tendril::render
