@@ -5,6 +5,7 @@
 #include "tendril/core/log.h"
 #include "tendril/core/progress.h"
 #include "tendril/core/timer.h"
+#include "tendril/io/export_model.h"
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
 #include "tendril/plant/plant_model.h"
@@ -89,13 +90,15 @@ int runGrow(const GrowOptions& o) {
   options.mesh.radialSegments = sc.output.radialSegments;
   options.mesh.subdivisions = sc.output.subdivisions;
 
+  // Mesh once; both writers share the meshes, materials and textures.
+  io::ExportModel model = io::buildExportModel(exportScene, options);
   std::vector<std::string> written;
   if (formats.count("glb")) {
-    io::writeGlb(exportScene, outDir / "plant.glb", options);
+    io::writeGlb(model, outDir / "plant.glb");
     written.push_back((outDir / "plant.glb").string());
   }
   if (formats.count("obj")) {
-    io::writeObj(exportScene, outDir / "plant.obj", options);
+    io::writeObj(model, outDir / "plant.obj");
     written.push_back((outDir / "plant.obj").string());
   }
 
