@@ -1,6 +1,7 @@
 // Growth throughput of the climbing model (seed 003) over support meshes of 10k, 100k and 1M
 // triangles, and the whole job (grow + mesh + .glb) for a plant of more than 300k segments.
 // Results and the command that produced them: bench/README.md.
+#include "tendril/climb/climb_model.h"
 #include "tendril/climb/climb_system.h"
 #include "tendril/core/timer.h"
 #include "tendril/env/environment.h"
@@ -92,7 +93,7 @@ constexpr int kSteps = 260;
 // Grows kPlants Japanese ivy plants along the foot of the wall; returns the segment count and
 // adds the growth time (steps only) to *seconds.
 std::unique_ptr<climb::ClimbSystem> growWall(const env::Environment& env, double* seconds, size_t* segments) {
-  static const climb::ClimbSpecies ivy = scene::loadClimbSpecies("japanese-ivy", "");
+  static const climb::ClimbSpecies ivy = climb::loadSpecies("japanese-ivy", "");
   auto system = std::make_unique<climb::ClimbSystem>(7, 1.0f);
   for (int i = 0; i < kPlants; ++i) {
     climb::ClimbPlantDef def;

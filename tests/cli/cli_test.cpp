@@ -105,6 +105,8 @@ TEST(Cli, BadScenesNameFileAndPlace) {
        "\"mesh\", got \"cube\""},
       {"version", R"({"tendril": 7})", ":/tendril: scene format version 7 is not supported (this build reads 1)"},
       {"no-version", R"({"plants": []})", ":/tendril: is required"},
+      {"model", R"({"tendril": 1, "plants": [{"position": [0, 0, 1], "model": "triffid"}]})",
+       ":/plants/0/model: must be one of \"climb\""},
       {"species", R"({"tendril": 1, "plants": [{"position": [0, 0, 1], "species": "kudzu"}]})",
        ":/plants/0/species: unknown species \"kudzu\""},
       {"opening", R"({"tendril": 1, "environment": {"obstacles": [{"type": "wall", "size": [2, 2, 0.2],

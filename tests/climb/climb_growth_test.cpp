@@ -1,6 +1,7 @@
 // Behaviour of seed 003's climbing growth on the support shapes users give it.
 #include "support/climb_checks.h"
 #include "support/test_paths.h"
+#include "tendril/climb/climb_model.h"
 #include "tendril/core/parallel.h"
 #include "tendril/env/mesh_import.h"
 #include "tendril/scene/scene.h"
@@ -24,7 +25,7 @@ std::unique_ptr<session::Session> grow(const std::string& sceneJson, int steps,
 }
 
 void expectClean(const session::Session& s, double nearFraction = 0.95) {
-  float adhesion = s.scene().plants[0].climbSpecies.adhesionDistance;
+  float adhesion = s.scene().plants[0].paramsAs<climb::ClimbParams>()->species.adhesionDistance;
   size_t total = 0;
   for (const plant::PlantModel& p : s.plants()) {
     test::ClimbReport r = test::checkClimbingPlant(p, s.environment(), adhesion);

@@ -1,10 +1,10 @@
 #include "tendril/scene/scene.h"
 
-#include "tendril/core/embedded.h"
 #include "tendril/core/error.h"
 #include "tendril/core/json_reader.h"
 #include "tendril/env/mesh_import.h"
 #include "tendril/env/primitives.h"
+#include "tendril/models/registry.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -14,44 +14,6 @@
 namespace tendril::scene {
 
 namespace {
-
-constexpr const char* kSpeciesDir = "species/";
-
-std::string joinNames(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
-// Reads a species document (a preset or a user file) into `s`.
-void readSpeciesDocument(const Json& json, const std::string& source, const std::filesystem::path& dir,
-                         climb::ClimbSpecies& s) {
-  JsonObject o(json, source);
-  std::string model = o.choice("model", "climb", {"climb"});
-  (void)model;
-  climb::readClimbSpecies(o, s, dir.string());
-  o.finish();
-}
-
-climb::ClimbSpecies speciesFromReference(const std::string& ref, const std::filesystem::path& baseDir,
-                                         const std::string& source, const std::string& pointer) {
-  bool isPath = ref.find('/') != std::string::npos || (ref.size() > 5 && ref.compare(ref.size() - 5, 5, ".json") == 0);
-  climb::ClimbSpecies s;
-  if (!isPath) {
-    const EmbeddedFile* f = findEmbeddedFile(kSpeciesDir + ref + ".json");
-    if (!f)
-      throw Error(source, pointer,
-                  fmt::format("unknown species \"{}\" (built-in: {}; or give a path to a .json file)", ref,
-                              joinNames(builtinSpeciesNames())));
-    std::string name = "<built-in>/" + std::string(f->path);
-    readSpeciesDocument(parseJson(f->contents, name), name, "", s);
-    return s;
-  }
-  std::filesystem::path p = std::filesystem::path(ref).is_absolute() ? std::filesystem::path(ref) : baseDir / ref;
-  if (!std::filesystem::exists(p)) throw Error(source, pointer, fmt::format("species file {} does not exist", p.string()));
-  readSpeciesDocument(readJsonFile(p), p.string(), p.parent_path(), s);
-  return s;
-}
 
 RigidTransform readTransform(JsonObject& o) {
   RigidTransform t;
@@ -162,45 +124,23 @@ PlantSpec readPlant(JsonObject& o, const std::filesystem::path& baseDir, size_t 
   PlantSpec p;
   p.pointer = o.pointer();
   p.name = o.string("name", fmt::format("plant{}", index));
-  p.model = o.choice("model", "climb", {"climb"});
+  p.model = o.string("model", "climb");
+  const models::ModelType* model = models::findModelType(p.model);
+  if (!model) {
+    std::string names;
+    for (const models::ModelType& t : models::modelTypes()) names += (names.empty() ? "\"" : ", \"") + t.name + "\"";
+    throw o.error("model", fmt::format("must be one of {}, got \"{}\"", names, p.model));
+  }
   if (!o.has("position")) throw o.error("position", "is required (the seed point, [x, y, z] in m)");
   p.position = o.vec3("position", Vec3::Zero());
   p.direction = o.direction("direction", Vec3::UnitY());
   p.seed = o.seed("seed", index + 1);
-  const Json* sp = o.find("species");
-  if (!sp) {
-    p.climbSpecies = speciesFromReference("japanese-ivy", baseDir, o.source(), o.pointerTo("species"));
-  } else if (sp->is_string()) {
-    p.climbSpecies = speciesFromReference(sp->get<std::string>(), baseDir, o.source(), o.pointerTo("species"));
-  } else if (sp->is_object()) {
-    // Inline species: {"base": "<preset or file>", ...fields overriding it}.
-    JsonObject so(*sp, o.source(), o.pointerTo("species"));
-    std::string base = so.string("base", "japanese-ivy");
-    p.climbSpecies = speciesFromReference(base, baseDir, o.source(), so.pointerTo("base"));
-    climb::readClimbSpecies(so, p.climbSpecies, baseDir.string());
-    so.finish();
-  } else {
-    throw o.error("species", "expected a species name, a .json path or an object, got " + describeJson(*sp));
-  }
+  p.params = model->read(o, baseDir);
   o.finish();
   return p;
 }
 
 }  // namespace
-
-std::vector<std::string> builtinSpeciesNames() {
-  std::vector<std::string> names;
-  for (const EmbeddedFile& f : embeddedFiles()) {
-    std::string_view path = f.path;
-    if (path.rfind(kSpeciesDir, 0) == 0 && path.size() > 5 && path.substr(path.size() - 5) == ".json")
-      names.emplace_back(path.substr(8, path.size() - 8 - 5));
-  }
-  return names;
-}
-
-climb::ClimbSpecies loadClimbSpecies(const std::string& nameOrPath, const std::filesystem::path& baseDir) {
-  return speciesFromReference(nameOrPath, baseDir, "species", "");
-}
 
 Scene parseScene(const Json& json, const std::string& source, const std::filesystem::path& baseDir) {
   JsonObject root(json, source);

@@ -4,9 +4,9 @@
 // file and the JSON pointer; a missing or broken mesh names its path.
 #pragma once
 
-#include "tendril/climb/species.h"
 #include "tendril/core/json_reader.h"
 #include "tendril/env/environment.h"
+#include "tendril/scene/plant_spec.h"
 
 #include <filesystem>
 #include <string>
@@ -15,16 +15,6 @@
 namespace tendril::scene {
 
 inline constexpr int kSceneFormatVersion = 1;
-
-struct PlantSpec {
-  std::string name;
-  std::string model = "climb";  // growth model: "climb"
-  std::string pointer;          // JSON pointer of the plant in the scene file, for messages
-  Vec3 position = Vec3::Zero();
-  Vec3 direction = Vec3::UnitY();
-  uint64_t seed = 1;
-  climb::ClimbSpecies climbSpecies;  // model == "climb"
-};
 
 struct OutputSettings {
   int radialSegments = 8;       // around each branch
@@ -53,10 +43,5 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
 
 // Fills an environment with the scene's obstacles, lights, strokes and wind, and commits it.
 void populateEnvironment(const Scene& scene, env::Environment& env);
-
-// Species presets compiled in from examples/species/*.json.
-std::vector<std::string> builtinSpeciesNames();
-// A climbing-model species by built-in name or .json path (relative to baseDir).
-climb::ClimbSpecies loadClimbSpecies(const std::string& nameOrPath, const std::filesystem::path& baseDir);
 
 }  // namespace tendril::scene

@@ -2,31 +2,36 @@
 
 #include "tendril/core/error.h"
 
+#include <fmt/format.h>
+
 namespace tendril::session {
 
-Session::Session(scene::Scene scene)
-    : scene_(std::move(scene)), env_(std::make_unique<env::Environment>()), climb_(scene_.seed, scene_.stepTime) {
+Session::Session(scene::Scene scene) : scene_(std::move(scene)), env_(std::make_unique<env::Environment>()) {
   scene::populateEnvironment(scene_, *env_);
-  const std::string& source = scene_.source;
+  const models::SystemContext context{scene_.seed, scene_.stepTime};
   for (const scene::PlantSpec& p : scene_.plants) {
-    climb::ClimbPlantDef def;
-    def.name = p.name;
-    def.species = p.climbSpecies;
-    def.position = p.position;
-    def.direction = p.direction;
-    def.seed = p.seed;
-    try {
-      climbIds_.push_back(climb_.addPlant(def, *env_));
-    } catch (const Error& e) {
-      throw Error(source, p.pointer + "/position", e.message());
+    size_t s = 0;
+    while (s < systemModels_.size() && systemModels_[s] != p.model) ++s;
+    if (s == systems_.size()) {
+      const models::ModelType* type = models::findModelType(p.model);
+      if (!type) throw Error(scene_.source, p.pointer + "/model", fmt::format("unknown model \"{}\"", p.model));
+      systems_.push_back(type->createSystem(context));
+      systemModels_.push_back(p.model);
     }
+    try {
+      systems_[s]->addPlant(p, *env_);
+    } catch (const Error& e) {
+      throw Error(scene_.source, e.location().empty() ? p.pointer + "/position" : p.pointer + e.location(),
+                  e.message());
+    }
+    plants_.push_back({s, systems_[s]->plantCount() - 1});
   }
 }
 
 Session::~Session() = default;
 
 void Session::step() {
-  climb_.step(*env_);
+  for (auto& s : systems_) s->step(*env_);
   ++steps_;
 }
 
@@ -37,14 +42,23 @@ void Session::run(uint32_t steps, const std::function<void(uint32_t)>& onStep) {
   }
 }
 
-bool Session::finished() const { return climb_.finished(); }
+bool Session::finished() const {
+  for (const auto& s : systems_)
+    if (!s->finished()) return false;
+  return true;
+}
 
 std::vector<plant::PlantModel> Session::plants() const {
   std::vector<plant::PlantModel> out;
-  for (uint32_t id : climbIds_) out.push_back(climb_.snapshot(id));
+  out.reserve(plants_.size());
+  for (const PlantRef& r : plants_) out.push_back(systems_[r.system]->snapshot(r.index));
   return out;
 }
 
-size_t Session::segmentCount() const { return climb_.stats().segments; }
+size_t Session::segmentCount() const {
+  size_t n = 0;
+  for (const auto& s : systems_) n += s->segmentCount();
+  return n;
+}
 
 }  // namespace tendril::session

@@ -2,8 +2,8 @@
 // Apps (CLI, studio) drive a Session; they never reach around it.
 #pragma once
 
-#include "tendril/climb/climb_system.h"
 #include "tendril/env/environment.h"
+#include "tendril/models/registry.h"
 #include "tendril/plant/plant_model.h"
 #include "tendril/scene/scene.h"
 
@@ -15,7 +15,8 @@ namespace tendril::session {
 
 class Session {
  public:
-  // Builds the environment and seeds every plant. Throws Error for seeds inside obstacles.
+  // Builds the environment and seeds every plant. Throws Error for seeds inside obstacles and
+  // other bad plant settings, naming the scene file and the plant's JSON pointer.
   explicit Session(scene::Scene scene);
   ~Session();
   Session(const Session&) = delete;
@@ -38,10 +39,16 @@ class Session {
   size_t segmentCount() const;
 
  private:
+  struct PlantRef {
+    size_t system;  // index into systems_
+    size_t index;   // plant index within that system
+  };
+
   scene::Scene scene_;
   std::unique_ptr<env::Environment> env_;
-  climb::ClimbSystem climb_;
-  std::vector<uint32_t> climbIds_;  // per scene plant
+  std::vector<std::unique_ptr<models::PlantSystem>> systems_;  // one per model in use
+  std::vector<std::string> systemModels_;
+  std::vector<PlantRef> plants_;  // per scene plant
   uint32_t steps_ = 0;
 };
 

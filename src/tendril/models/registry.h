@@ -1,0 +1,55 @@
+// The growth models a scene can use ("model" of a scene plant): each reads its own keys of a
+// plant from the scene file and grows all plants of its kind in a Session. Adding a model is
+// one entry in models/builtin_models.cpp.
+#pragma once
+
+#include "tendril/core/json_reader.h"
+#include "tendril/env/environment.h"
+#include "tendril/plant/plant_model.h"
+#include "tendril/scene/plant_spec.h"
+
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+
+namespace tendril::models {
+
+// Every plant of one model in a Session, grown together (e.g. climbing plants see each
+// other's crowding; particle plants share one particle world).
+class PlantSystem {
+ public:
+  virtual ~PlantSystem() = default;
+  // Adds a plant. Throws Error for bad settings (the Session names the file and pointer).
+  virtual void addPlant(const scene::PlantSpec& spec, const env::Environment& env) = 0;
+  // One step of every plant of this model.
+  virtual void step(const env::Environment& env) = 0;
+  // True when no plant of this model changes any more.
+  virtual bool finished() const = 0;
+  virtual size_t plantCount() const = 0;
+  // The plant with the given index (in the order added) as a PlantModel.
+  virtual plant::PlantModel snapshot(size_t plant) const = 0;
+  // Skeleton segments of all plants (progress reports).
+  virtual size_t segmentCount() const = 0;
+};
+
+struct SystemContext {
+  uint64_t sceneSeed = 1;
+  float stepTime = 1.0f;  // plant age per growth step (s)
+};
+
+struct ModelType {
+  std::string name;
+  std::string description;
+  // Reads the model's own keys of a scene plant object (the shared keys are already read;
+  // the caller calls finish()). `baseDir` resolves relative paths.
+  std::function<std::shared_ptr<const scene::ModelParams>(JsonObject& plant, const std::filesystem::path& baseDir)>
+      read;
+  std::function<std::unique_ptr<PlantSystem>(const SystemContext& context)> createSystem;
+};
+
+std::span<const ModelType> modelTypes();
+const ModelType* findModelType(std::string_view name);
+
+}  // namespace tendril::models
