@@ -1,5 +1,7 @@
 # Writes OUTPUT: a C++ source with the contents of FILES (paths under ROOT) as string literals,
-# reachable through tendril::embeddedFiles(). Run with cmake -P at build time.
+# reachable through tendril::embeddedFiles(). Run with cmake -P at build time; FILES is
+# separated by '|'.
+string(REPLACE "|" ";" FILES "${FILES}")
 set(body "")
 set(entries "")
 foreach(file IN LISTS FILES)

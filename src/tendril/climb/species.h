@@ -38,7 +38,7 @@ struct ClimbSpecies {
   float decreaseRadius = 0.97f;
   float decreaseLength = 0.97f;
   float decreaseLeafSize = 0.94f;
-  float minLength = 0.006f;     // a tip whose segments get shorter dies (m)
+  float minLength = 0.004f;     // a tip whose segments get shorter dies (m)
   float minRadius = 0.0008f;    // radii never drop below (m)
   // A lateral shoot starts from its parent shoot's start values times these factors
   // (radius, length, leaf size): each shoot repeats eq. 8's decrease from its base.
@@ -47,9 +47,9 @@ struct ClimbSpecies {
 
   // Tropism strengths (seed 003 eq. 6–7): the tip turns toward the weighted sum.
   float gravity = 0.12f;         // downward, only when not climbing
-  float light = 0.12f;           // toward the lights
+  float light = 0.08f;           // toward the lights
   float lightAmbient = 0.3f;     // fraction of the light pull kept in full shade (sky light)
-  float randomness = 0.12f;      // random direction per segment
+  float randomness = 0.16f;      // random direction per segment
   float adhesion = 0.35f;        // toward the nearest surface, only when climbing
   Vec3 userDirection = Vec3::UnitY();
   float userDirectionStrength = 0.0f;  // pseudo-tropism toward a user direction
@@ -91,7 +91,7 @@ struct ClimbSpecies {
   std::vector<Rule> rules = {
       {RuleKind::Tropism, 1, 1.0f},   {RuleKind::CollisionAvoidance, 1, 1.0f},
       {RuleKind::Decrease, 1, 1.0f},  {RuleKind::PlaceLeaf, 2, 1.0f},
-      {RuleKind::Branch, 4, 0.35f},   {RuleKind::Die, 10, 0.02f},
+      {RuleKind::Branch, 3, 0.6f},    {RuleKind::Die, 10, 0.02f},
   };
 
   int maxSegments = 500000;  // per plant; growth stops (with a warning) when reached
