@@ -2,8 +2,15 @@
 
 namespace tendril {
 
+namespace {
+thread_local uint64_t gErrorsCreated = 0;
+}
+
+uint64_t Error::createdOnThisThread() { return gErrorsCreated; }
+
 Error::Error(std::string source, std::string location, std::string message)
     : source_(std::move(source)), location_(std::move(location)), message_(std::move(message)) {
+  ++gErrorsCreated;
   // One line, always: a newline in a message (e.g. from a third-party parser) is folded.
   for (char& c : message_)
     if (c == '\n' || c == '\r') c = ' ';

@@ -3,6 +3,7 @@
 // type that crosses module boundaries; programming errors are assertions instead.
 #pragma once
 
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -20,6 +21,10 @@ class Error : public std::exception {
 
   // "source:location: message" on one line (parts that are empty are left out).
   const char* what() const noexcept override { return what_.c_str(); }
+
+  // How many Errors this thread has created so far (lets readers tell "an error was raised
+  // and handled" from "a reader was left unfinished").
+  static uint64_t createdOnThisThread();
 
  private:
   std::string source_, location_, message_, what_;

@@ -99,7 +99,8 @@ size_t editDistance(std::string_view a, std::string_view b) {
 }
 
 JsonObject::JsonObject(const Json& json, std::string source, std::string pointer)
-    : json_(&json), source_(std::move(source)), pointer_(std::move(pointer)) {
+    : json_(&json), source_(std::move(source)), pointer_(std::move(pointer)),
+      errorsAtStart_(Error::createdOnThisThread()) {
   if (!json.is_object())
     throw Error(source_, pointer_.empty() ? "/" : pointer_,
                 "expected an object, got " + describeJson(json));
@@ -111,7 +112,8 @@ JsonObject::JsonObject(JsonObject&& o) noexcept
       pointer_(std::move(o.pointer_)),
       read_(std::move(o.read_)),
       asked_(std::move(o.asked_)),
-      finished_(o.finished_) {
+      finished_(o.finished_),
+      errorsAtStart_(o.errorsAtStart_) {
   o.finished_ = true;
 }
 
@@ -122,13 +124,16 @@ JsonObject& JsonObject::operator=(JsonObject&& o) noexcept {
   read_ = std::move(o.read_);
   asked_ = std::move(o.asked_);
   finished_ = o.finished_;
+  errorsAtStart_ = o.errorsAtStart_;
   o.finished_ = true;
   return *this;
 }
 
 JsonObject::~JsonObject() {
-  // Every reader must call finish(): otherwise unknown keys would pass silently.
-  assert((finished_ || std::uncaught_exceptions() > 0) && "JsonObject::finish() was not called");
+  // Every reader must call finish(): otherwise unknown keys would pass silently. Reading that
+  // stopped at an Error (in flight, or raised and already handled) is exempt.
+  assert((finished_ || std::uncaught_exceptions() > 0 || Error::createdOnThisThread() != errorsAtStart_) &&
+         "JsonObject::finish() was not called");
 }
 
 std::string JsonObject::pointerTo(std::string_view key) const {

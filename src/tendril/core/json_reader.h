@@ -101,6 +101,7 @@ class JsonObject {
   std::set<std::string, std::less<>> read_;   // keys present and read
   std::set<std::string, std::less<>> asked_;  // every key asked for, present or not
   bool finished_ = false;
+  uint64_t errorsAtStart_ = 0;  // Error::createdOnThisThread() when constructed
 };
 
 // Levenshtein distance, for "did you mean" suggestions.
