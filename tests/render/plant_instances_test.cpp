@@ -143,8 +143,11 @@ TEST(RenderTextures, AlphaMipmapsKeepThinLeavesFromVanishing) {
   // Colour is averaged over opaque texels only: the black transparent field does not darken it.
   for (size_t level = 1; level <= 4; ++level) {
     const io::Image& img = chain[level];
-    for (size_t i = 0; i < img.rgba.size(); i += 4)
-      if (img.rgba[i + 3] >= 128) ASSERT_EQ(img.rgba[i + 1], 120) << "level " << level;
+    for (size_t i = 0; i < img.rgba.size(); i += 4) {
+      if (img.rgba[i + 3] >= 128) {
+        ASSERT_EQ(img.rgba[i + 1], 120) << "level " << level;
+      }
+    }
   }
 }
 

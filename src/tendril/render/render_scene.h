@@ -62,8 +62,10 @@ struct GroundGrid {
 struct RenderScene {
   std::vector<ObstacleView> obstacles;
   std::vector<PlantView> plants;
-  // Lights as the environment defines them; an empty list gets one soft light from above
-  // and in front. The first directional light casts shadows.
+  // Lights as the environment defines them; an empty list gets one light from above and in
+  // front. Intensities are relative weights: together the lights give a fixed irradiance
+  // (sun-like, before exposure), point lights falling off as 1 / (1 + d²). The first
+  // directional light casts shadows; up to 8 lights are used.
   std::vector<env::Light> lights;
   std::vector<env::Stroke> strokes;  // painted points: attract green-ish, repel red-ish
   std::vector<GizmoLine> gizmos;

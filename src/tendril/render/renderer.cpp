@@ -430,6 +430,9 @@ void Renderer::Impl::drawLeaves(GLuint p, const Mat4& clipFromWorld) {
 }
 
 void Renderer::Impl::shadowPass(const RenderScene& scene, const Mat4& lightClip) {
+  // The map is about to be drawn into: make sure no texture unit still holds it.
+  glActiveTexture(GL_TEXTURE0 + kShadowUnit);
+  glBindTexture(GL_TEXTURE_2D, 0);
   glBindFramebuffer(GL_DRAW_FRAMEBUFFER, shadowFbo.get());
   glViewport(0, 0, shadowSize, shadowSize);
   glClearColor(1.0f, 1.0f, 0.0f, 0.0f);  // moments of the far plane: lit
