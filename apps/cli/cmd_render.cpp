@@ -118,8 +118,8 @@ int runRender(const RenderOptions& o) {
 
   if (!o.common.quiet) {
     log::info("{}", renderer.context().description());
-    log::info("rendered {}×{}: {} branch segments, {} leaves, {} obstacle triangles in {:.1f} ms (instances {:.1f} ms, "
-              "upload {:.1f} ms, GPU and read-back {:.1f} ms)",
+    log::info("rendered {}×{}: {} branch segments, {} leaves, {} obstacle triangles in {:.1f} ms (instances and "
+              "textures {:.1f} ms, upload {:.1f} ms, shaders, drawing and read-back {:.1f} ms)",
               o.width, o.height, stats.branchInstances, stats.leafInstances, stats.obstacleTriangles, renderMs,
               stats.buildMs, stats.uploadMs, renderMs - stats.buildMs - stats.uploadMs);
     log::info("grew {} plant(s) in {} steps (growth {:.2f} s, total {:.2f} s); wrote {}", view.plants().size(),

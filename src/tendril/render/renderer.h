@@ -29,7 +29,7 @@ struct FrameStats {
   size_t leafInstances = 0;
   size_t obstacleTriangles = 0;
   size_t drawCalls = 0;
-  double buildMs = 0.0;   // CPU: instance arrays from the plants
+  double buildMs = 0.0;   // CPU: instance arrays from the plants (and textures seen for the first time)
   double uploadMs = 0.0;  // CPU: buffer and texture uploads
   double drawMs = 0.0;    // CPU: issuing the shadow and main passes (the GPU may still be busy)
 };
