@@ -336,6 +336,44 @@ TEST(RenderOffscreen, SelectedObstaclesAreHighlighted) {
   EXPECT_FALSE(differs(plain.pixel(wx, wy), selected.pixel(wx, wy), 0));
 }
 
+TEST(RenderOffscreen, PlantPrimitivesAreDrawnInTheirColourAndCastShadows) {
+  auto r = makeRenderer();
+  ASSERT_TRUE(r);
+  TestScene t(true, false);
+  // A one-node plant carrying a 30 cm yellow cube 40 cm above the node, turned 45° about y;
+  // the same mesh twice (one draw), the second cube beside the first.
+  plant::PlantModel p = meshtest::straightChain(1, 0.2f, 0.01f, 0.01f, Vec3(-0.3f, 0.3f, 0.4f));
+  plant::PrimitiveMesh cube;
+  cube.mesh = env::makeBox(Vec3::Constant(0.3f));
+  cube.color = Vec3(0.8f, 0.65f, 0.05f);
+  p.meshes.push_back(cube);
+  for (float dx : {0.0f, 0.6f}) {
+    plant::Primitive prim;
+    prim.node = 0;
+    Eigen::Affine3f nodeFromPrimitive = Eigen::Translation3f(dx, 0.4f, 0.0f) * axisAngle(Vec3::UnitY(), 0.25f * kPi);
+    prim.nodeFromPrimitive = nodeFromPrimitive.matrix();
+    p.primitives.push_back(prim);
+  }
+  PlantView view;
+  view.model = &p;
+  t.scene.plants.push_back(view);
+  io::Image img = r->render(t.scene, t.camera, testSettings());
+  EXPECT_EQ(r->renderer().lastFrame().primitiveInstances, 2u);
+  for (float dx : {0.0f, 0.6f}) {
+    auto [x, y] = pixelOf(t.camera, Vec3(-0.3f + dx, 0.7f, 0.4f));
+    const uint8_t* px = img.pixel(x, y);
+    EXPECT_GT(px[0], px[2] + 60) << "yellow cube " << dx;
+    EXPECT_GT(px[1], px[2] + 60) << "yellow cube " << dx;
+  }
+  // The cubes cast shadows onto the wall like everything else: the wall behind and to the
+  // lower right of the first cube is darker than the wall far to the left.
+  Vec3 centre(-0.3f, 0.7f, 0.4f);
+  Vec3 onWall = centre + (centre.z() / -kLightDirection.z()) * kLightDirection;
+  auto [sx, sy] = pixelOf(t.camera, onWall);
+  auto [fx, fy] = pixelOf(t.camera, Vec3(-0.9f, onWall.y(), 0.0f));
+  EXPECT_LT(luminance(img, sx, sy), 0.7 * luminance(img, fx, fy));
+}
+
 TEST(RenderOffscreen, StrokesAndGizmosAreDrawn) {
   auto r = makeRenderer();
   ASSERT_TRUE(r);

@@ -113,6 +113,33 @@ TEST(RenderInstances, LeafBladesFollowThePlantModelFrame) {
   }
 }
 
+TEST(RenderInstances, PrimitivesArePlacedByTheirNodeAndGroupedByMesh) {
+  plant::PlantModel p = meshtest::branchingTree();
+  p.meshes.resize(2);
+  p.meshes[0].color = Vec3(1, 0, 0);
+  p.meshes[1].color = Vec3(0, 0, 1);
+  Mat4 offset = Eigen::Affine3f(Eigen::Translation3f(0.0f, 0.1f, 0.0f)).matrix();
+  p.primitives.push_back({3, 1, offset});
+  p.primitives.push_back({-1, 1, offset});  // node −1: already in world space
+  p.primitives.push_back({7, 0, Mat4::Identity()});
+  PlantView view;
+  view.model = &p;
+  view.selected = {7, 1};
+  std::vector<std::vector<PrimitiveInstance>> perMesh;
+  appendPrimitiveInstances(view, perMesh);
+  ASSERT_EQ(perMesh.size(), 2u);
+  ASSERT_EQ(perMesh[0].size(), 1u);
+  ASSERT_EQ(perMesh[1].size(), 2u);
+  auto origin = [](const PrimitiveInstance& i) { return xyz(i.worldFromPrimitive[3]); };
+  // 0.1 m along node 3's +Y from its start.
+  EXPECT_LT((origin(perMesh[1][0]) - (p.position[3] + 0.1f * p.direction(3))).norm(), 1e-6f);
+  EXPECT_LT((origin(perMesh[1][1]) - Vec3(0.0f, 0.1f, 0.0f)).norm(), 1e-6f);
+  EXPECT_LT((origin(perMesh[0][0]) - p.position[7]).norm(), 1e-6f);
+  EXPECT_EQ(xyz(perMesh[1][0].color), Vec3(0, 0, 1));
+  EXPECT_EQ(perMesh[0][0].color.w, 1.0f) << "on a selected node";
+  EXPECT_EQ(perMesh[1][0].color.w, 0.0f);
+}
+
 TEST(RenderTextures, AlphaMipmapsKeepThinLeavesFromVanishing) {
   // Eight spokes 3 texels wide, like the leaflets of a compound leaf, on a transparent field.
   // Box-filtered mipmaps fade such thin parts below the alpha test at 0.5, so the leaf

@@ -1,5 +1,7 @@
 #include "tendril/render/plant_instances.h"
 
+#include "tendril/mesh/primitive_mesh.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -115,6 +117,21 @@ void appendLeafInstances(const PlantView& view, std::span<const float> shapeLaye
     l.halfWidth = gpu((0.5f * size * shapeAspect[shape]) * axes.col(0), shapeLayer[shape]);
     l.along = gpu(size * axes.col(1), view.selected.contains(size_t(m.leafNode[i])) ? 1.0f : 0.0f);
     l.tint = gpu(shapeTint[shape], 0.0f);
+  }
+}
+
+void appendPrimitiveInstances(const PlantView& view, std::vector<std::vector<PrimitiveInstance>>& perMesh) {
+  assert(view.model);
+  const PlantModel& m = *view.model;
+  perMesh.resize(std::max(perMesh.size(), m.meshes.size()));
+  for (const plant::Primitive& p : m.primitives) {
+    assert(p.mesh < m.meshes.size());
+    Mat4 world = mesh::worldFromNode(m, p.node) * p.nodeFromPrimitive;
+    PrimitiveInstance inst;
+    for (int c = 0; c < 4; ++c) inst.worldFromPrimitive[c] = {world(0, c), world(1, c), world(2, c), world(3, c)};
+    bool selected = p.node >= 0 && view.selected.contains(size_t(p.node));
+    inst.color = gpu(m.meshes[p.mesh].color, selected ? 1.0f : 0.0f);
+    perMesh[p.mesh].push_back(inst);
   }
 }
 

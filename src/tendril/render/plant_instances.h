@@ -49,6 +49,14 @@ struct LeafInstance {
 };
 static_assert(sizeof(LeafInstance) == 4 * 16);
 
+// A primitive mesh placed in the world (the graph model's shapes): 5 × vec4, matching the
+// primitive vertex shader's instance attributes.
+struct PrimitiveInstance {
+  GpuVec4 worldFromPrimitive[4];  // columns of worldFromNode · nodeFromPrimitive
+  GpuVec4 color;                  // linear RGB of its PrimitiveMesh, highlight (0 or 1)
+};
+static_assert(sizeof(PrimitiveInstance) == 5 * 16);
+
 // Colour for stress s in [0, 1]: blue → red through violet (seed 000 fig. 6, 10).
 Vec3 stressColor(float stress);
 
@@ -64,5 +72,9 @@ void appendBranchInstances(const PlantView& view, float barkLayer, const Vec3& b
 // covered).
 void appendLeafInstances(const PlantView& view, std::span<const float> shapeLayer, std::span<const float> shapeAspect,
                          std::span<const Vec3> shapeTint, std::vector<LeafInstance>& out);
+
+// Appends one instance per primitive of `view.model` to perMesh[its mesh index] (perMesh is
+// resized to the plant's mesh count). Primitives on selected nodes are highlighted.
+void appendPrimitiveInstances(const PlantView& view, std::vector<std::vector<PrimitiveInstance>>& perMesh);
 
 }  // namespace tendril::render

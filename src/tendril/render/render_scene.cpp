@@ -1,6 +1,7 @@
 #include "tendril/render/render_scene.h"
 
 #include "tendril/core/error.h"
+#include "tendril/mesh/primitive_mesh.h"
 
 #include <fmt/format.h>
 
@@ -23,6 +24,16 @@ Bounds3 sceneBounds(const RenderScene& scene) {
       Vec3 base = m.leafWorldPosition(i);
       b.extend(base);
       b.extend(base + (m.leafPetiole[i] + m.leafSize[i]) * (m.leafWorldRotation(i) * Vec3::UnitY()));
+    }
+    for (const plant::Primitive& p : m.primitives) {
+      Bounds3 local = m.meshes[p.mesh].mesh.bounds();
+      if (local.empty()) continue;
+      Mat4 world = mesh::worldFromNode(m, p.node) * p.nodeFromPrimitive;
+      for (int k = 0; k < 8; ++k) {
+        Vec4 corner((k & 1) ? local.max.x() : local.min.x(), (k & 2) ? local.max.y() : local.min.y(),
+                    (k & 4) ? local.max.z() : local.min.z(), 1.0f);
+        b.extend(Vec3((world * corner).head<3>()));
+      }
     }
   }
   for (const env::Stroke& s : scene.strokes)

@@ -76,7 +76,7 @@ struct RenderScene {
   Bounds3 focus;
 };
 
-// Bounds of every obstacle (world), plant node, leaf and stroke point.
+// Bounds of every obstacle (world), plant node, leaf, plant primitive and stroke point.
 Bounds3 sceneBounds(const RenderScene& scene);
 // scene.focus, or sceneBounds when it is empty.
 Bounds3 focusBounds(const RenderScene& scene);

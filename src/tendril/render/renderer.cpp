@@ -176,21 +176,45 @@ struct ObstacleGpu {
   uint64_t lastFrame = 0;
 };
 
-uint64_t meshKey(const ObstacleView& o) {
-  if (o.meshKey) return o.meshKey;
+uint64_t hashMesh(const TriangleMesh& mesh) {
   Hasher h;
-  h.add(uint64_t(o.mesh->positions.size()));
-  h.add(o.mesh->positions.data(), o.mesh->positions.size() * sizeof(Vec3));
-  h.add(uint64_t(o.mesh->indices.size()));
-  h.add(o.mesh->indices.data(), o.mesh->indices.size() * sizeof(uint32_t));
+  h.add(uint64_t(mesh.positions.size()));
+  h.add(mesh.positions.data(), mesh.positions.size() * sizeof(Vec3));
+  h.add(uint64_t(mesh.indices.size()));
+  h.add(mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
   return h.digest();
 }
+
+// Positions and indices of `mesh` into a new vertex array (attribute 0).
+void uploadMesh(const TriangleMesh& mesh, ObstacleGpu& g) {
+  g.vao = gl::makeVertexArray();
+  g.vertices = gl::makeBuffer();
+  g.indices = gl::makeBuffer();
+  glBindVertexArray(g.vao.get());
+  glBindBuffer(GL_ARRAY_BUFFER, g.vertices.get());
+  glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(mesh.positions.size() * sizeof(Vec3)), mesh.positions.data(),
+               GL_STATIC_DRAW);
+  glEnableVertexAttribArray(0);
+  glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vec3), nullptr);
+  glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.indices.get());
+  glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(mesh.indices.size() * sizeof(uint32_t)), mesh.indices.data(),
+               GL_STATIC_DRAW);
+  g.indexCount = GLsizei(mesh.indices.size());
+}
+
+// A plant primitive mesh on the GPU with this frame's instances of it (from every plant).
+struct PrimitiveGpu {
+  ObstacleGpu mesh;
+  gl::Buffer instances;
+  size_t capacity = 0;
+  std::vector<PrimitiveInstance> data;
+};
 
 }  // namespace
 
 struct Renderer::Impl {
-  gl::Program branch, leaf, obstacle, stroke, line;
-  gl::Program branchShadow, leafShadow, obstacleShadow, blur;
+  gl::Program branch, leaf, obstacle, primitive, stroke, line;
+  gl::Program branchShadow, leafShadow, obstacleShadow, primitiveShadow, blur;
 
   gl::VertexArray branchVao, capVao, leafVao, strokeVao, lineVao, emptyVao;
   gl::Buffer branchInstances, capInstances, leafInstances, strokeInstances, lineInstances;
@@ -202,6 +226,7 @@ struct Renderer::Impl {
   TextureLayers leafLayers{mesh::kDefaultLeafTexture, true};
   TextureLayers barkLayers{"builtin:bark", false};
   std::unordered_map<uint64_t, ObstacleGpu> obstacles;
+  std::unordered_map<uint64_t, PrimitiveGpu> primitives;  // by mesh content
   uint64_t frame = 0;
 
   int shadowSize = 0;
@@ -224,6 +249,8 @@ struct Renderer::Impl {
   void drawObstacles(const RenderScene& scene, GLuint program, const Mat4& clipFromWorld, bool colors);
   void drawBranches(GLuint program, const Mat4& clipFromWorld);
   void drawLeaves(GLuint program, const Mat4& clipFromWorld);
+  void drawPrimitives(GLuint program, const Mat4& clipFromWorld);
+  PrimitiveGpu& primitiveGpu(const TriangleMesh& mesh);
   void shadowPass(const RenderScene& scene, const Mat4& lightClip);
 };
 
@@ -233,15 +260,17 @@ Renderer::Impl::Impl() {
   branch = gl::makeProgram("branch", "", kBranchVertex, lit + kBranchFragment);
   leaf = gl::makeProgram("leaf", "", kLeafVertex, lit + kLeafFragment);
   obstacle = gl::makeProgram("obstacle", "", kObstacleVertex, lit + kObstacleFragment);
+  primitive = gl::makeProgram("primitive", "", kPrimitiveVertex, lit + kPrimitiveFragment);
   stroke = gl::makeProgram("stroke", "", kStrokeVertex, lit + kStrokeFragment);
   line = gl::makeProgram("line", "", kLineVertex, kLineFragment);
   branchShadow = gl::makeProgram("branch shadow", "", kBranchVertex, kMomentsFragment);
   leafShadow = gl::makeProgram("leaf shadow", "#define ALPHA_TEST 1\n", kLeafVertex, kMomentsFragment);
   obstacleShadow = gl::makeProgram("obstacle shadow", "", kObstacleVertex, kMomentsFragment);
+  primitiveShadow = gl::makeProgram("primitive shadow", "", kPrimitiveVertex, kMomentsFragment);
   blur = gl::makeProgram("shadow blur", "", kFullscreenVertex, kBlurFragment);
 
   // Sampler units never change: set them once.
-  for (GLuint p : {branch.get(), leaf.get(), obstacle.get(), stroke.get()}) {
+  for (GLuint p : {branch.get(), leaf.get(), obstacle.get(), primitive.get(), stroke.get()}) {
     glUseProgram(p);
     glUniform1i(uniform(p, "uShadowMoments"), kShadowUnit);
     glUniform1i(uniform(p, "uBark"), kBarkUnit);
@@ -348,26 +377,27 @@ void Renderer::Impl::ensureShadowMap(int size) {
 }
 
 ObstacleGpu& Renderer::Impl::obstacleGpu(const ObstacleView& o) {
-  uint64_t key = meshKey(o);
-  auto [it, added] = obstacles.try_emplace(key);
+  auto [it, added] = obstacles.try_emplace(o.meshKey ? o.meshKey : hashMesh(*o.mesh));
   ObstacleGpu& g = it->second;
   if (added) {
-    g.vao = gl::makeVertexArray();
-    g.vertices = gl::makeBuffer();
-    g.indices = gl::makeBuffer();
-    glBindVertexArray(g.vao.get());
-    glBindBuffer(GL_ARRAY_BUFFER, g.vertices.get());
-    glBufferData(GL_ARRAY_BUFFER, GLsizeiptr(o.mesh->positions.size() * sizeof(Vec3)), o.mesh->positions.data(),
-                 GL_STATIC_DRAW);
-    glEnableVertexAttribArray(0);
-    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(Vec3), nullptr);
-    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, g.indices.get());
-    glBufferData(GL_ELEMENT_ARRAY_BUFFER, GLsizeiptr(o.mesh->indices.size() * sizeof(uint32_t)),
-                 o.mesh->indices.data(), GL_STATIC_DRAW);
-    g.indexCount = GLsizei(o.mesh->indices.size());
+    uploadMesh(*o.mesh, g);
     glBindVertexArray(0);
   }
   g.lastFrame = frame;
+  return g;
+}
+
+PrimitiveGpu& Renderer::Impl::primitiveGpu(const TriangleMesh& mesh) {
+  auto [it, added] = primitives.try_emplace(hashMesh(mesh));
+  PrimitiveGpu& g = it->second;
+  if (added) {
+    uploadMesh(mesh, g.mesh);  // leaves its vertex array bound
+    g.instances = gl::makeBuffer();
+    instanceAttributes(g.instances, 1, 5, GLsizei(sizeof(PrimitiveInstance)));
+    glBindVertexArray(0);
+  }
+  if (g.mesh.lastFrame != frame) g.data.clear();
+  g.mesh.lastFrame = frame;
   return g;
 }
 
@@ -429,6 +459,18 @@ void Renderer::Impl::drawLeaves(GLuint p, const Mat4& clipFromWorld) {
   ++stats.drawCalls;
 }
 
+void Renderer::Impl::drawPrimitives(GLuint p, const Mat4& clipFromWorld) {
+  if (primitives.empty()) return;
+  glUseProgram(p);
+  setMat4(p, "uClipFromWorld", clipFromWorld);
+  for (auto& [key, g] : primitives) {
+    if (g.data.empty()) continue;
+    glBindVertexArray(g.mesh.vao.get());
+    glDrawElementsInstanced(GL_TRIANGLES, g.mesh.indexCount, GL_UNSIGNED_INT, nullptr, GLsizei(g.data.size()));
+    ++stats.drawCalls;
+  }
+}
+
 void Renderer::Impl::shadowPass(const RenderScene& scene, const Mat4& lightClip) {
   // The map is about to be drawn into: make sure no texture unit still holds it.
   glActiveTexture(GL_TEXTURE0 + kShadowUnit);
@@ -442,6 +484,7 @@ void Renderer::Impl::shadowPass(const RenderScene& scene, const Mat4& lightClip)
   glDepthFunc(GL_LESS);
   glDisable(GL_CULL_FACE);
   drawObstacles(scene, obstacleShadow.get(), lightClip, false);
+  drawPrimitives(primitiveShadow.get(), lightClip);
   drawBranches(branchShadow.get(), lightClip);
   drawLeaves(leafShadow.get(), lightClip);
 
@@ -501,6 +544,7 @@ void Renderer::render(const RenderScene& scene, const Camera& camera, const Rend
   m.leafData.clear();
   std::vector<float> shapeLayer, shapeAspect;
   std::vector<Vec3> shapeTint;
+  std::vector<std::vector<PrimitiveInstance>> perMesh;
   for (const PlantView& view : scene.plants) {
     if (!view.model) continue;
     const plant::PlantModel& model = *view.model;
@@ -517,6 +561,16 @@ void Renderer::render(const RenderScene& scene, const Camera& camera, const Rend
       shapeTint[s] = shape.tint;
     }
     appendLeafInstances(view, shapeLayer, shapeAspect, shapeTint, m.leafData);
+    if (!model.primitives.empty()) {
+      perMesh.clear();
+      appendPrimitiveInstances(view, perMesh);
+      for (size_t i = 0; i < perMesh.size(); ++i) {
+        if (perMesh[i].empty() || model.meshes[i].mesh.indices.empty()) continue;
+        PrimitiveGpu& g = m.primitiveGpu(model.meshes[i].mesh);
+        g.data.insert(g.data.end(), perMesh[i].begin(), perMesh[i].end());
+        m.stats.primitiveInstances += perMesh[i].size();
+      }
+    }
   }
   m.strokeData.clear();
   for (const env::Stroke& s : scene.strokes) {
@@ -582,6 +636,10 @@ void Renderer::render(const RenderScene& scene, const Camera& camera, const Rend
       m.stats.obstacleTriangles += o.mesh->triangleCount();
     }
   std::erase_if(m.obstacles, [&](const auto& entry) { return entry.second.lastFrame != m.frame; });
+  std::erase_if(m.primitives, [&](const auto& entry) { return entry.second.mesh.lastFrame != m.frame; });
+  for (auto& [key, g] : m.primitives)
+    gl::uploadStream(GL_ARRAY_BUFFER, g.instances, g.data.data(), g.data.size() * sizeof(PrimitiveInstance),
+                     g.capacity);
   m.stats.uploadMs = timer.milliseconds();
 
   // --- 2. shadow pass ---
@@ -625,12 +683,13 @@ void Renderer::render(const RenderScene& scene, const Camera& camera, const Rend
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_LESS);
   const Mat4 clipFromWorld = camera.clipFromWorld(float(width) / float(height));
-  for (GLuint p : {m.obstacle.get(), m.branch.get(), m.leaf.get(), m.stroke.get()}) {
+  for (GLuint p : {m.obstacle.get(), m.primitive.get(), m.branch.get(), m.leaf.get(), m.stroke.get()}) {
     glUseProgram(p);
     m.setLighting(p, lights, shadowFromWorld, camera, settings.exposure);
   }
   glDisable(GL_CULL_FACE);
   m.drawObstacles(scene, m.obstacle.get(), clipFromWorld, true);
+  m.drawPrimitives(m.primitive.get(), clipFromWorld);
   glEnable(GL_CULL_FACE);
   glCullFace(GL_BACK);
   glFrontFace(GL_CCW);

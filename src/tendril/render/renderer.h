@@ -9,7 +9,8 @@
 //     variance shadow map fitted to the scene's focus bounds (Donnelly & Lauritzen 2006);
 //     branches, obstacles and alpha-tested leaves cast. A separable Gaussian blur pre-filters
 //     the map, which is what gives soft edges without aliasing.
-//  3. Main pass into the caller's framebuffer: obstacles (flat normals), branches (bark
+//  3. Main pass into the caller's framebuffer: obstacles and plant primitives (flat normals,
+//     primitives instanced per distinct mesh), branches (bark
 //     texture, or blue→red stress colours), leaves (alpha-tested at 0.5, textured, double-
 //     sided with translucency), stroke points, ground grid and gizmo lines. Lighting is
 //     Blinn-Phong with hemispheric ambient, tone-mapped (ACES) and written sRGB-encoded.
@@ -27,6 +28,7 @@ namespace tendril::render {
 struct FrameStats {
   size_t branchInstances = 0;
   size_t leafInstances = 0;
+  size_t primitiveInstances = 0;
   size_t obstacleTriangles = 0;
   size_t drawCalls = 0;
   double buildMs = 0.0;   // CPU: instance arrays from the plants (and textures seen for the first time)

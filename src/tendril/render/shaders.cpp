@@ -282,6 +282,37 @@ void main() {
 }
 )glsl";
 
+const char* const kPrimitiveVertex = R"glsl(
+layout(location = 0) in vec3 aPosition;
+layout(location = 1) in vec4 iColumn0;  // worldFromPrimitive, column by column
+layout(location = 2) in vec4 iColumn1;
+layout(location = 3) in vec4 iColumn2;
+layout(location = 4) in vec4 iColumn3;
+layout(location = 5) in vec4 iColor;    // rgb, highlight
+uniform mat4 uClipFromWorld;
+out vec3 vWorld;
+flat out vec4 vColor;
+
+void main() {
+  vec4 world = mat4(iColumn0, iColumn1, iColumn2, iColumn3) * vec4(aPosition, 1.0);
+  vWorld = world.xyz;
+  vColor = iColor;
+  gl_Position = uClipFromWorld * world;
+}
+)glsl";
+
+const char* const kPrimitiveFragment = R"glsl(
+in vec3 vWorld;
+flat in vec4 vColor;
+layout(location = 0) out vec4 fragColor;
+
+void main() {
+  vec3 N = normalize(cross(dFdx(vWorld), dFdy(vWorld)));
+  vec3 color = shade(vWorld, N, vColor.rgb, 0.06, 16.0, 0.0);
+  fragColor = vec4(toneMap(highlight(color, vColor.a, vWorld, N)), 1.0);
+}
+)glsl";
+
 const char* const kStrokeVertex = R"glsl(
 layout(location = 0) in vec3 aPosition;    // unit sphere
 layout(location = 1) in vec4 iCentre;      // centre, radius

@@ -18,6 +18,9 @@ extern const char* const kLeafFragment;
 // Obstacles: positions only; flat normals from screen-space derivatives.
 extern const char* const kObstacleVertex;
 extern const char* const kObstacleFragment;
+// Plant primitives: instanced meshes with a world matrix each, flat normals like obstacles.
+extern const char* const kPrimitiveVertex;
+extern const char* const kPrimitiveFragment;
 // Stroke points: instanced unit spheres.
 extern const char* const kStrokeVertex;
 extern const char* const kStrokeFragment;
