@@ -1,6 +1,7 @@
 // The table of growth models. One entry per model; each model's reader and system live in its
 // own module.
 #include "tendril/climb/climb_model.h"
+#include "tendril/graph/graph_model.h"
 #include "tendril/models/registry.h"
 
 namespace tendril::models {
@@ -8,6 +9,7 @@ namespace tendril::models {
 std::span<const ModelType> modelTypes() {
   static const ModelType kTypes[] = {
       climb::climbModelType(),
+      graph::graphModelType(),
   };
   return kTypes;
 }

@@ -1,0 +1,72 @@
+#include "tendril/graph/graph_model.h"
+
+#include "tendril/core/error.h"
+#include "tendril/graph/build_plant.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace tendril::graph {
+
+namespace {
+
+class GraphPlantSystem final : public models::PlantSystem {
+ public:
+  void addPlant(const scene::PlantSpec& spec, const env::Environment&) override {
+    const auto* params = spec.paramsAs<GraphPlantParams>();
+    if (!params || !params->model) throw Error("", "/graph", "a graph plant needs a \"graph\" file");
+    plant::PlantModel model = *params->model;
+    model.name = spec.name;
+    plants_.push_back(std::move(model));
+  }
+  void step(const env::Environment&) override {}
+  bool finished() const override { return true; }
+  size_t plantCount() const override { return plants_.size(); }
+  plant::PlantModel snapshot(size_t plant) const override { return plants_[plant]; }
+  size_t segmentCount() const override {
+    size_t n = 0;
+    for (const plant::PlantModel& p : plants_) n += p.nodeCount();
+    return n;
+  }
+
+ private:
+  std::vector<plant::PlantModel> plants_;
+};
+
+std::shared_ptr<const scene::ModelParams> readGraphPlant(JsonObject& o, const std::filesystem::path& baseDir) {
+  auto params = std::make_shared<GraphPlantParams>();
+  if (!o.has("graph")) throw o.error("graph", "is required for a graph plant: the graph file (JSON)");
+  std::filesystem::path path = o.string("graph", "");
+  if (path.is_relative()) path = baseDir / path;
+  path = path.lexically_normal();
+  if (!std::filesystem::exists(path))
+    throw o.error("graph", fmt::format("graph file {} does not exist", path.string()));
+
+  std::vector<Override> overrides;
+  if (auto ov = o.optionalObject("overrides")) {
+    for (auto it = ov->json().begin(); it != ov->json().end(); ++it) {
+      ov->markRead(it.key());
+      overrides.push_back({it.key(), it.value(), {o.source(), ov->pointerTo(it.key())}});
+    }
+    ov->finish();
+  }
+  params->graph = loadGraph(path, overrides);
+
+  // The placement and seed are the scene's shared plant keys (already checked by the scene
+  // reader); they are needed here because the plant is generated now.
+  ExpandOptions options;
+  options.seed = o.has("seed") ? o.seed("seed", 0) : params->graph->seed;
+  options.placement.position = o.vec3("position", Vec3::Zero());
+  options.placement.rotation = rotationBetween(Vec3::UnitY(), o.direction("direction", Vec3::UnitY()));
+  params->model = std::make_shared<const plant::PlantModel>(generatePlant(params->graph, options));
+  return params;
+}
+
+}  // namespace
+
+models::ModelType graphModelType() {
+  return {"graph", "component graph after seed 004 (Xfrog: p-graph expanded to an i-tree, then geometry)",
+          readGraphPlant, [](const models::SystemContext&) { return std::make_unique<GraphPlantSystem>(); }};
+}
+
+}  // namespace tendril::graph
