@@ -14,7 +14,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const char* kExamples[] = {"sunflower", "rhododendron", "chestnut", "agave", "willow", "philodendron", "pine", "pine-deformed", "fig2", "point-sets"};
+const char* kExamples[] = {"sunflower", "rhododendron", "chestnut", "agave", "willow", "philodendron", "pine", "pine-deformed", "fig2", "point-sets", "advent-wreath"};
 
 fs::path examplePath(const std::string& name) { return test::sourceDir() / "examples/graphs" / (name + ".json"); }
 
