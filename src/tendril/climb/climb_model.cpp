@@ -78,6 +78,8 @@ std::vector<std::string> builtinSpeciesNames() {
   std::vector<std::string> names;
   for (const EmbeddedFile& f : embeddedFiles()) {
     std::string_view path = f.path;
+    // Species files of other models (e.g. "model": "particles") are not climbing species.
+    if (f.contents.find("\"model\": \"climb\"") == std::string_view::npos) continue;
     if (path.rfind(kSpeciesDir, 0) == 0 && path.size() > 5 && path.substr(path.size() - 5) == ".json")
       names.emplace_back(path.substr(kSpeciesDir.size(), path.size() - kSpeciesDir.size() - 5));
   }

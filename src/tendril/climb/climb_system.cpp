@@ -160,10 +160,13 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   // surface was found when the previous segment ended here; surfaces the tip grows away from
   // do not hold it, so only when that one faces the growth direction is a filtered search due.
   const float cosRelease = std::cos(s.releaseAngle);
-  std::optional<env::SurfacePoint> support = t.support;
-  if (support && support->away.dot(t.dir) > cosRelease)
-    support = env.closestPointFacing(t.position, s.adhesionDistance, t.dir, cosRelease);
-  const bool climbing = support.has_value();
+  const env::SurfacePoint* support = tip.support ? &*tip.support : nullptr;  // (t.support changes below)
+  std::optional<env::SurfacePoint> filtered;
+  if (support && support->away.dot(t.dir) > cosRelease) {
+    filtered = env.closestPointFacing(t.position, s.adhesionDistance, t.dir, cosRelease);
+    support = filtered ? &*filtered : nullptr;
+  }
+  const bool climbing = support != nullptr;
   if (climbing) t.normal = support->away;
   t.unsupported = climbing ? 0 : t.unsupported + 1;
   if (s.maxUnsupported > 0 && t.unsupported > uint32_t(s.maxUnsupported)) {

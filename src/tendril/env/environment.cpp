@@ -6,6 +6,7 @@
 #include "tendril/env/topology.h"
 
 #include <embree3/rtcore.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cassert>
@@ -573,10 +574,24 @@ void Environment::buildSdf(ObstacleData& o) const {
 }
 
 float Environment::obstacleSdf(const ObstacleData& o, const Vec3& worldP, Vec3* gradient) const {
-  std::call_once(o.sdfOnce, [&] { buildSdf(const_cast<ObstacleData&>(o)); });
+  // Built on first use. The build is a parallel loop; isolating it keeps the waiting thread
+  // from picking up another task of an enclosing parallel loop, which could enter this same
+  // call_once recursively.
+  std::call_once(o.sdfOnce, [&] { tbb::this_task_arena::isolate([&] { buildSdf(const_cast<ObstacleData&>(o)); }); });
   Vec3 local = o.info.worldFromLocal.inverse().applyPoint(worldP);
-  if (gradient) *gradient = o.info.worldFromLocal.applyVector(o.sdf.gradient(local));
-  return o.sdf.sample(local);
+  if (!gradient) return o.sdf.sample(local);
+  Vec3 g;
+  float d = o.sdf.sampleWithGradient(local, &g);
+  float len = g.norm();
+  *gradient = len > 1e-12f ? o.info.worldFromLocal.applyVector(g / len) : Vec3::Zero();
+  return d;
+}
+
+void Environment::buildDistanceFields() const {
+  for (const auto& o : obstacles_) {
+    Vec3 g;
+    obstacleSdf(*o, o->info.worldBounds.center(), &g);
+  }
 }
 
 float Environment::signedDistance(const Vec3& p) const { return signedDistance(p, nullptr); }

@@ -137,6 +137,9 @@ class Environment {
   // Exact signed distance (negative inside closed obstacles) from the closest point and the
   // angle-weighted pseudonormal; +maxDistance when nothing is that close.
   float exactSignedDistance(const Vec3& p, float maxDistance) const;
+  // Builds every obstacle's SDF grid now (they are otherwise built on first use), so that the
+  // first simulation step does not pay for them.
+  void buildDistanceFields() const;
   // Signed distance from the obstacles' SDF grids (trilinear), min over obstacles.
   float signedDistance(const Vec3& p) const;
   // signedDistance and its unit gradient (pointing away from the nearest obstacle).

@@ -46,10 +46,44 @@ float SdfGrid::trilinear(const Vec3& p) const {
 }
 
 float SdfGrid::sample(const Vec3& p) const {
-  if (values_.empty()) return std::numeric_limits<float>::infinity();
+  if (values_.empty() || !isFinite(p)) return std::numeric_limits<float>::infinity();
   Bounds3 b = bounds();
   Vec3 clamped = p.cwiseMax(b.min).cwiseMin(b.max);
   return trilinear(clamped) + (p - clamped).norm();
+}
+
+float SdfGrid::sampleWithGradient(const Vec3& p, Vec3* gradient) const {
+  if (values_.empty() || !isFinite(p)) {
+    *gradient = Vec3::Zero();
+    return std::numeric_limits<float>::infinity();
+  }
+  Bounds3 b = bounds();
+  Vec3 clamped = p.cwiseMax(b.min).cwiseMin(b.max);
+  Vec3 outside = p - clamped;
+  float extra = outside.norm();
+  Vec3 g = (clamped - origin_) / cell_;
+  int i[3];
+  float f[3];
+  for (int k = 0; k < 3; ++k) {
+    float c = std::clamp(g[k], 0.0f, float(dims_[k] - 1));
+    i[k] = std::min(static_cast<int>(c), dims_[k] - 2);
+    f[k] = c - float(i[k]);
+  }
+  const float c000 = at(i[0], i[1], i[2]), c100 = at(i[0] + 1, i[1], i[2]);
+  const float c010 = at(i[0], i[1] + 1, i[2]), c110 = at(i[0] + 1, i[1] + 1, i[2]);
+  const float c001 = at(i[0], i[1], i[2] + 1), c101 = at(i[0] + 1, i[1], i[2] + 1);
+  const float c011 = at(i[0], i[1] + 1, i[2] + 1), c111 = at(i[0] + 1, i[1] + 1, i[2] + 1);
+  const float fx = f[0], fy = f[1], fz = f[2], gx = 1 - fx, gy = 1 - fy, gz = 1 - fz;
+  float d = gz * (gy * (gx * c000 + fx * c100) + fy * (gx * c010 + fx * c110)) +
+            fz * (gy * (gx * c001 + fx * c101) + fy * (gx * c011 + fx * c111));
+  Vec3 grad((gz * (gy * (c100 - c000) + fy * (c110 - c010)) + fz * (gy * (c101 - c001) + fy * (c111 - c011))),
+            (gz * (gx * (c010 - c000) + fx * (c110 - c100)) + fz * (gx * (c011 - c001) + fx * (c111 - c101))),
+            (gy * (gx * (c001 - c000) + fx * (c101 - c100)) + fy * (gx * (c011 - c010) + fx * (c111 - c110))));
+  grad /= cell_;
+  // Beyond the grid the distance grows along the way out.
+  if (extra > 0.0f) grad += outside / extra * std::max(1.0f, grad.norm());
+  *gradient = grad;
+  return d + extra;
 }
 
 Vec3 SdfGrid::gradient(const Vec3& p) const {

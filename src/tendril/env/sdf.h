@@ -29,6 +29,9 @@ class SdfGrid {
   // Unit gradient of the trilinear field by central differences (points away from the
   // surface outside a closed obstacle). Zero where the field is flat.
   Vec3 gradient(const Vec3& p) const;
+  // Distance and the (unnormalised) analytic gradient of the trilinear interpolant, from one
+  // cell's eight samples: the cheap query for collision handling.
+  float sampleWithGradient(const Vec3& p, Vec3* gradient) const;
 
  private:
   float at(int x, int y, int z) const { return values_[(static_cast<size_t>(z) * dims_.y() + y) * dims_.x() + x]; }
