@@ -2,6 +2,7 @@
 // own module.
 #include "tendril/climb/climb_model.h"
 #include "tendril/graph/graph_model.h"
+#include "tendril/lsystem/lsystem_model.h"
 #include "tendril/models/registry.h"
 
 namespace tendril::models {
@@ -10,6 +11,7 @@ std::span<const ModelType> modelTypes() {
   static const ModelType kTypes[] = {
       climb::climbModelType(),
       graph::graphModelType(),
+      lsystem::lsystemModelType(),
   };
   return kTypes;
 }

@@ -1,0 +1,116 @@
+#include "tendril/lsystem/lsystem_model.h"
+
+#include "tendril/core/error.h"
+#include "tendril/lsystem/grammar_files.h"
+#include "tendril/lsystem/lsystem.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace tendril::lsystem {
+
+namespace {
+
+class LSystemPlantSystem final : public models::PlantSystem {
+ public:
+  explicit LSystemPlantSystem(const models::SystemContext& c) : context_(c) {}
+
+  void addPlant(const scene::PlantSpec& spec, const env::Environment& env) override {
+    const auto* params = spec.paramsAs<LSystemParams>();
+    if (!params || !params->grammar) throw Error("", "/grammar", "the plant has no grammar");
+    RunOptions o;
+    o.seed = spec.seed ^ mix64(context_.sceneSeed);
+    o.plant = plants_.size();
+    o.derivationLength = params->derivationLength;
+    o.start.position = spec.position;
+    o.start.heading = spec.direction;
+    o.stepTime = context_.stepTime;
+    try {
+      auto ls = std::make_unique<LSystem>(params->grammar, o);
+      ls->answerQueries(&env);
+      plants_.push_back(std::move(ls));
+    } catch (const Error& e) {
+      // Start: or the axiom failed: the Session names the scene plant; keep the grammar's place.
+      throw Error("", "/grammar", e.what());
+    }
+    names_.push_back(spec.name);
+  }
+
+  void step(const env::Environment& env) override {
+    for (auto& p : plants_) p->step(&env);
+  }
+
+  bool finished() const override {
+    for (const auto& p : plants_)
+      if (!p->finished()) return false;
+    return true;
+  }
+
+  size_t plantCount() const override { return plants_.size(); }
+
+  plant::PlantModel snapshot(size_t plant) const override {
+    plant::PlantModel m = plants_.at(plant)->interpret();
+    m.name = names_[plant];
+    return m;
+  }
+
+  size_t segmentCount() const override {
+    size_t n = 0;
+    for (const auto& p : plants_) n += p->segmentModules();
+    return n;
+  }
+
+ private:
+  models::SystemContext context_;
+  std::vector<std::unique_ptr<LSystem>> plants_;
+  std::vector<std::string> names_;
+};
+
+std::shared_ptr<const scene::ModelParams> readLSystemPlant(JsonObject& o, const std::filesystem::path& baseDir) {
+  auto params = std::make_shared<LSystemParams>();
+  if (!o.has("grammar"))
+    throw o.error("grammar", "is required: a built-in grammar name (e.g. \"japanese-ivy\") or a path to a .ls file");
+  std::string ref = o.requiredString("grammar");
+  CompileOptions options;
+  if (const Json* d = o.find("define")) {
+    if (!d->is_object())
+      throw o.error("define", "expected an object of define: constants and numbers, got " + describeJson(*d));
+    for (auto it = d->begin(); it != d->end(); ++it) {
+      std::string ptr = o.pointerTo("define") + "/" + jsonPointerEscape(it.key());
+      if (!it.value().is_number()) throw Error(o.source(), ptr, "expected a number, got " + describeJson(it.value()));
+      double v = it.value().get<double>();
+      if (!std::isfinite(v)) throw Error(o.source(), ptr, "is not a finite number");
+      options.defines.emplace_back(it.key(), v);
+    }
+  }
+  std::shared_ptr<const Grammar> grammar = loadGrammar(ref, baseDir, {}, o.source(), o.pointerTo("grammar"));
+  if (!options.defines.empty()) {
+    // Unknown names are reported at the scene key, with the grammar's constants listed.
+    for (const auto& [name, value] : options.defines) {
+      bool known = false;
+      std::string list;
+      for (const auto& [n, v] : grammar->defines) {
+        known |= n == name;
+        list += (list.empty() ? "" : ", ") + n;
+      }
+      if (!known)
+        throw Error(o.source(), o.pointerTo("define") + "/" + jsonPointerEscape(name),
+                    fmt::format("grammar {} has no define: constant \"{}\" (its constants: {})", grammar->source, name,
+                                list.empty() ? "none" : list));
+    }
+    grammar = loadGrammar(ref, baseDir, options, o.source(), o.pointerTo("grammar"));
+  }
+  params->grammar = std::move(grammar);
+  int64_t length = o.integer("derivation_length", -1, 0, 10'000'000);
+  if (length >= 0) params->derivationLength = int(length);
+  return params;
+}
+
+}  // namespace
+
+models::ModelType lsystemModelType() {
+  return {"lsystem", "an L-system grammar drawn by a turtle (docs/grammar.md); ?E queries see the scene",
+          readLSystemPlant, [](const models::SystemContext& c) { return std::make_unique<LSystemPlantSystem>(c); }};
+}
+
+}  // namespace tendril::lsystem

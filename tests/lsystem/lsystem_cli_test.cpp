@@ -1,0 +1,116 @@
+// `tendril lsys` and scene plants with "model": "lsystem": exit codes, one-line errors with the
+// grammar line and a caret under them, valid output.
+#include "lsystem/lsystem_test_util.h"
+#include "support/run_command.h"
+
+#include <gtest/gtest.h>
+
+namespace tendril::lsystem {
+namespace {
+
+using tendril::test::quoted;
+using tendril::test::runTendril;
+using tendril::test::scratchDir;
+using tendril::test::writeText;
+
+std::string firstLine(const std::string& s) { return s.substr(0, s.find('\n')); }
+
+TEST(LSystemCli, DerivesAGrammarIntoAValidGlb) {
+  auto dir = scratchDir();
+  auto r = runTendril("lsys " + quoted(test::grammarPath("abop-1.24d.ls")) + " -n 4 -o " + quoted(dir / "d.glb"),
+                      dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  auto v = tendril::test::validateGltf(dir / "d.glb", dir);
+  EXPECT_EQ(v.exitCode, 0) << v.out << v.err;
+  // A built-in name, .obj output, --print, --seed and --define.
+  r = runTendril("lsys abop-1.27-stochastic -n 2 --seed 4 --print -q -o " + quoted(dir / "s.obj"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(dir / "s.obj"));
+  std::string printed = firstLine(r.out);
+  EXPECT_EQ(printed.find_first_not_of("F[]+-"), std::string::npos) << printed;
+  auto again = runTendril("lsys abop-1.27-stochastic -n 2 --seed 4 --print -q -o " + quoted(dir / "s.obj"), dir);
+  EXPECT_EQ(again.out, r.out);
+  r = runTendril("lsys abop-2.6-monopodial -D r1=0.5 -D d=90 -q -o " + quoted(dir / "m.glb"), dir);
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+}
+
+TEST(LSystemCli, ParseErrorsPrintTheLineWithACaretAndExit2) {
+  auto dir = scratchDir();
+  writeText(dir / "bad.ls", "axiom: A\nA -> B(1 +)\n");
+  auto r = runTendril("lsys " + quoted(dir / "bad.ls") + " -o " + quoted(dir / "x.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: " + (dir / "bad.ls").string() +
+                       ":2:11: expected a number, a name or '(', found ')'\n 2 | A -> B(1 +)\n   |           ^\n");
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.glb"));
+}
+
+TEST(LSystemCli, RunTimeErrorsNameTheRuleAndExit2) {
+  auto dir = scratchDir();
+  writeText(dir / "div.ls", "derivation length: 3\naxiom: A(2)\nA(x) -> A(x - 1) B(1 / x)\n");
+  auto r = runTendril("lsys " + quoted(dir / "div.ls") + " -q -o " + quoted(dir / "x.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: " + (dir / "div.ls").string() +
+                       ":3:22: division by zero in production `A(x) -> A(x - 1) B(1 / x)` (rewriting module 0, A(0), "
+                       "in step 3)\n 3 | A(x) -> A(x - 1) B(1 / x)\n   |                      ^\n");
+  writeText(dir / "big.ls", "max length: 100\nderivation length: 10\naxiom: A\nA -> A A\n");
+  r = runTendril("lsys " + quoted(dir / "big.ls") + " -q -o " + quoted(dir / "x.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: " + (dir / "big.ls").string() +
+                       ": step 7 would make the string longer than 100 modules (its limit); raise `max length:` in "
+                       "the grammar, or derive fewer steps\n");
+}
+
+TEST(LSystemCli, CommandLineErrorsExit2) {
+  auto dir = scratchDir();
+  auto r = runTendril("lsys abop-1.24a -o " + quoted(dir / "x.png"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: command line:-o: the output must end in .glb or .obj, got \"" +
+                       (dir / "x.png").string() + "\"\n");
+  r = runTendril("lsys no-such-grammar -o " + quoted(dir / "x.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(firstLine(r.err).rfind("tendril: error: command line:GRAMMAR: unknown grammar \"no-such-grammar\" "
+                                   "(built-in: ",
+                                   0),
+            0u)
+      << r.err;
+  r = runTendril("lsys abop-1.24a -D r1 -o " + quoted(dir / "x.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: command line:--define: expected NAME=NUMBER, got \"r1\"\n");
+  r = runTendril("lsys abop-1.24a -D nope=1 -o " + quoted(dir / "x.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: <built-in>/grammars/abop-1.24a.ls: cannot set \"nope\": the grammar defines no "
+                   "such constant (its define: constants: none)\n");
+}
+
+TEST(LSystemCli, ScenePlantsWithTheLSystemModel) {
+  auto dir = scratchDir();
+  writeText(dir / "tree.ls", "derivation length: 4\ndefine: a = 30\nangle: a\naxiom: X\nX -> F[+X][-X]FX\nF -> FF\n");
+  writeText(dir / "scene.json", R"({"tendril": 1, "steps": 10, "plants": [
+      {"name": "tree", "model": "lsystem", "grammar": "tree.ls", "position": [1, 0, 0], "define": {"a": 20}},
+      {"name": "ivy", "model": "lsystem", "grammar": "abop-1.24a", "position": [-1, 0, 0], "derivation_length": 2}]})");
+  auto r = runTendril("grow " + quoted(dir / "scene.json") + " -q -o " + quoted(dir / "out"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  auto v = tendril::test::validateGltf(dir / "out" / "plant.glb", dir);
+  EXPECT_EQ(v.exitCode, 0) << v.out << v.err;
+
+  writeText(dir / "missing.json", R"({"tendril": 1, "plants": [{"model": "lsystem", "position": [0, 0, 0]}]})");
+  r = runTendril("grow " + quoted(dir / "missing.json") + " -o " + quoted(dir / "out"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: " + (dir / "missing.json").string() +
+                       ":/plants/0/grammar: is required: a built-in grammar name (e.g. \"japanese-ivy\") or a path to "
+                       "a .ls file\n");
+  writeText(dir / "define.json", R"({"tendril": 1, "plants": [{"model": "lsystem", "grammar": "tree.ls",
+      "position": [0, 0, 0], "define": {"b": 1}}]})");
+  r = runTendril("grow " + quoted(dir / "define.json") + " -o " + quoted(dir / "out"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: " + (dir / "define.json").string() + ":/plants/0/define/b: grammar " +
+                       (dir / "tree.ls").string() + " has no define: constant \"b\" (its constants: a)\n");
+  writeText(dir / "typo.json", R"({"tendril": 1, "plants": [{"model": "lsystem", "grammar": "tree.ls",
+      "position": [0, 0, 0], "derivaton_length": 3}]})");
+  r = runTendril("grow " + quoted(dir / "typo.json") + " -o " + quoted(dir / "out"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.err.find("derivation_length"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace tendril::lsystem
