@@ -169,12 +169,16 @@ TEST(GrammarErrors, RunTimeErrorsNameTheRule) {
        "test.ls:3:12: division by zero in interpretation rule `A(x) -> F(1/x)` (drawing module 0, A(0), in step "
        "1)"},
       {"global: g = 1\nStart: { g = g / 0; }\naxiom: A\n", "test.ls:2:16: division by zero in the Start block"},
-      // Unknown modules and parameter counts that only show when the string is drawn.
+      // Query kinds and parameter counts that are only known when a rule emits the query.
       {"axiom: A(7)\nA(k) -> ?E(k, 1, 0)\n",
-       "test.ls: interpretation: module 0 ?E(7, 1, 0): unknown ?E query kind 7 (SURFACE, HIT, LIGHT, ATTRACT or FACING)"},
+       "test.ls:2:9: unknown ?E query kind 7 (SURFACE, HIT, LIGHT, ATTRACT or FACING) in production `A(k) -> ?E(k, "
+       "1, 0)` (rewriting module 0, A(7), in step 1)"},
       {"axiom: A(3)\nA(k) -> ?E(k, 0, 0, 0, 0, 0)\n",
-       "test.ls: interpretation: module 0 ?E(3, 0, 0, 0, 0, 0): ?E of this kind takes 1 to 5 parameters, this one "
-       "has 6"},
+       "test.ls:2:9: ?E(LIGHT, ...) takes 1 to 5 parameters, 6 here in production `A(k) -> ?E(k, 0, 0, 0, 0, 0)` "
+       "(rewriting module 0, A(3), in step 1)"},
+      {"axiom: A(9)\ninterpretation:\nA(k) -> ?E(k, 1)\n",
+       "test.ls:3:9: unknown ?E query kind 9 (SURFACE, HIT, LIGHT, ATTRACT or FACING) in interpretation rule `A(k) "
+       "-> ?E(k, 1)` (drawing module 0, A(9), in step 0)"},  // found when step 0's queries are answered
       {"axiom: F ~leaf(1, 3)\n",
        "test.ls: interpretation: module 1 ~leaf(1, 3): leaf shape 3 does not exist (the grammar has 1 leaf shape, 0 "
        "to 0)"},

@@ -792,12 +792,7 @@ class Compiler {
   }
 
   void checkQueryKind(double kind, int arity, SourcePos pos) {
-    if (!(kind >= 1.0 && kind <= double(kQueryKinds) && kind == std::floor(kind)))
-      error(pos, fmt::format("unknown ?E query kind {:g} (SURFACE, HIT, LIGHT, ATTRACT or FACING)", kind));
-    auto [lo, hi] = queryArity(QueryKind(int(kind)));
-    const char* names[] = {"", "SURFACE", "HIT", "LIGHT", "ATTRACT", "FACING"};
-    if (arity < lo || arity > hi)
-      error(pos, fmt::format("?E({}, ...) takes {} to {} parameters, {} here", names[int(kind)], lo, hi, arity));
+    if (std::string problem = queryProblem(kind, arity); !problem.empty()) error(pos, problem);
   }
 
   static bool emitsCut(const syntax::ModuleString& s) {

@@ -109,6 +109,8 @@ class Rewriter {
         throw EvalFailure{loc, fmt::format("parameter {} of {} is not a finite number ({:g})", k + 1,
                                            g_.modules[id].name, params[k])};
     }
+    if (g_.modules[id].op == TurtleOp::QueryEnvironment)
+      if (std::string problem = queryProblem(f[0], int(n)); !problem.empty()) throw EvalFailure{loc, problem};
     const auto& list = g_.candidates[size_t(Section::Decomposition)][id];
     if (!list.empty()) {
       LazyRng rng(RandomKey{c_.seed, c_.plant, path, c_.step, kPurposeDecomposition});

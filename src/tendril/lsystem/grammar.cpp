@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace tendril::lsystem {
 
@@ -15,6 +16,15 @@ std::pair<int, int> queryArity(QueryKind kind) {
     case QueryKind::Facing: return {3, 7};
   }
   return {1, 6};
+}
+
+std::string queryProblem(double kind, int count) {
+  if (!(kind >= 1.0 && kind <= double(kQueryKinds) && kind == std::floor(kind)))
+    return fmt::format("unknown ?E query kind {:g} (SURFACE, HIT, LIGHT, ATTRACT or FACING)", kind);
+  auto [lo, hi] = queryArity(QueryKind(int(kind)));
+  if (count >= lo && count <= hi) return "";
+  const char* names[] = {"", "SURFACE", "HIT", "LIGHT", "ATTRACT", "FACING"};
+  return fmt::format("?E({}, ...) takes {} to {} parameters, {} here", names[int(kind)], lo, hi, count);
 }
 
 bool Grammar::hasRules(Section s) const {

@@ -63,6 +63,10 @@ enum class QueryKind : int { Surface = 1, Hit = 2, Light = 3, Attract = 4, Facin
 inline constexpr int kQueryKinds = 5;
 // The parameter counts a ?E query of a kind accepts: {min, max}.
 std::pair<int, int> queryArity(QueryKind kind);
+// Why a ?E module whose first parameter is `kind` and which has `count` parameters cannot be
+// answered; empty when it can. Checked where the module is written when the kind is a
+// constant, otherwise where a rule emits it, so that the error names the rule.
+std::string queryProblem(double kind, int count);
 
 struct ModuleInfo {
   std::string name;  // as written: "F", "@R", "?E", "~leaf", "Apex"

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <map>
 
@@ -151,6 +152,8 @@ class Turtle {
         throw EvalFailure{loc, fmt::format("parameter {} of {} is not a finite number ({:g})", k + 1,
                                            g_.modules[id].name, params[k])};
     }
+    if (g_.modules[id].op == TurtleOp::QueryEnvironment)
+      if (std::string problem = queryProblem(f[0], int(n)); !problem.empty()) throw EvalFailure{loc, problem};
     if (hasRules_[id]) expand(id, f, n, depth, path, kNotInString);
     else apply(id, f, n, kNotInString);
   }
@@ -479,17 +482,11 @@ class Turtle {
       case TurtleOp::QueryHeading: put(s.h.normalized()); return;
       case TurtleOp::QueryUp: put(s.u.normalized()); return;
       case TurtleOp::QueryLeft: put(s.l.normalized()); return;
-      case TurtleOp::QueryEnvironment: {
-        float k = p[0];
-        if (!(k >= 1.0f && k <= float(kQueryKinds) && k == std::floor(k)))
-          fail(id, p, n, fmt::format("unknown ?E query kind {:g} (SURFACE, HIT, LIGHT, ATTRACT or FACING)", k));
-        QueryKind kind = QueryKind(int(k));
-        auto [lo, hi] = queryArity(kind);
-        if (int(n) < lo || int(n) > hi)
-          fail(id, p, n, fmt::format("?E of this kind takes {} to {} parameters, this one has {}", lo, hi, n));
-        requests_.push_back({stringIndex, kind, s.pos, s.h.normalized()});
+      case TurtleOp::QueryEnvironment:
+        // The axiom, productions and decompositions that emitted it checked kind and count.
+        assert(queryProblem(p[0], int(n)).empty());
+        requests_.push_back({stringIndex, QueryKind(int(p[0])), s.pos, s.h.normalized()});
         return;
-      }
       default: return;
     }
   }
