@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <tuple>
 
 namespace tendril::lsystem {
 namespace {
@@ -238,6 +240,43 @@ TEST(LSystemDerivation, StochasticFrequenciesMatchTheProbabilities) {
   rel.derive();
   double f = double(countOf(rel, "B")) / n;
   EXPECT_NEAR(f, 0.25, 5 * std::sqrt(0.25 * 0.75 / n));
+}
+
+TEST(LSystemDerivation, StochasticChoiceIsAmongTheMembersWhoseConditionsAndContextsHold) {
+  // One group of four members. X(0) may only become C or D (weights 1 : 4); X(1) B or C (2 : 1);
+  // X(2), which sees Y on its right, B, C or P (2 : 1 : 3). A group whose matching members all
+  // weigh 0 is passed over. Frequencies lie within 5 standard deviations, as above.
+  const int n = 50000;
+  std::string axiom;
+  for (int i = 0; i < n; ++i) axiom += "X(0) X(1) X(2) Y Z ";
+  LSystem ls(compile("axiom: " + axiom + R"(
+X(k) : k > 0 -> B(k) : 2
+X(k) -> C(k) : 1
+X(k) : k == 0 -> D(k) : 4
+X(k) > Y -> P(k) : 3
+X(k) -> E
+Z -> A : 0
+Z -> G
+)"),
+             test::steps(1, 17));
+  ls.derive();
+  std::map<std::pair<std::string, float>, size_t> made;
+  const LString& str = ls.string();
+  for (size_t i = 0; i < str.size(); ++i)
+    ++made[{ls.grammar().module(str.ids[i]).name, str.paramCount(i) ? str.paramsOf(i)[0] : -1.0f}];
+  const std::tuple<const char*, float, double> expected[] = {
+      {"C", 0, 0.2}, {"D", 0, 0.8}, {"B", 1, 2.0 / 3}, {"C", 1, 1.0 / 3},
+      {"B", 2, 2.0 / 6}, {"C", 2, 1.0 / 6}, {"P", 2, 3.0 / 6}};
+  size_t total = 0;
+  for (auto [name, k, p] : expected) {
+    size_t count = made[{name, k}];
+    total += count;
+    EXPECT_NEAR(double(count) / n, p, 5 * std::sqrt(p * (1 - p) / n)) << name << "(" << k << ")";
+  }
+  EXPECT_EQ(total, size_t(3 * n));  // nothing else came of the X modules
+  EXPECT_EQ(countOf(ls, "E"), 0u);
+  EXPECT_EQ(countOf(ls, "G"), size_t(n));
+  EXPECT_EQ(countOf(ls, "A"), 0u);
 }
 
 TEST(LSystemDerivation, ResultIsTheSameForAnyThreadCount) {

@@ -234,7 +234,9 @@ TEST(Turtle, EnvironmentQueries) {
   e.commit();
   // The turtle stands 0.3 m in front of the wall, heading into it (-Z).
   LSystem ls(compile("axiom: @M(0, 0.3, 0.3) @R(0, 0, -1) ?E(SURFACE, 1, 0, 0, 0, 0) ?E(HIT, 2, 0, 0, 0, 0) "
-                     "?E(HIT, 0.1, 0, 0, 0, 0) ?E(LIGHT, 0, 0, 0, 0) ?E(ATTRACT, 0, 0, 0) ?E(SURFACE, 0.1, 5)\n"),
+                     "?E(HIT, 0.1, 0, 0, 0, 0) ?E(LIGHT, 0, 0, 0, 0) ?E(ATTRACT, 0, 0, 0) ?E(SURFACE, 0.1, 5) "
+                     "?E(FACING, 1, 50, 0, 0, 0, 0) @R(0, 0, 1) ?E(FACING, 1, 50, 0, 0, 0, 0) "
+                     "@R(0, 1, 0) ?E(FACING, 1, 50, 0, 0, 0, 0)\n"),
              test::steps(0));
   ls.answerQueries(&e);
   const LString& str = ls.string();
@@ -250,6 +252,12 @@ TEST(Turtle, EnvironmentQueries) {
   EXPECT_GT(pull.x(), 0.0f);  // toward the stroke point
   expectVec(Vec3(q(6)[1], q(6)[2], q(6)[3]), pull);
   EXPECT_EQ(q(7)[2], -1.0f);  // no surface within 0.1
+  // FACING ignores the surfaces the turtle grows away from (normal within 50 degrees of H).
+  EXPECT_NEAR(q(8)[3], 0.3f, 1e-4f);  // heading into the wall: it holds
+  expectVec(Vec3(q(8)[4], q(8)[5], q(8)[6]), Vec3(0, 0, 1));
+  EXPECT_EQ(q(10)[3], -1.0f);  // heading straight away from it: ignored (the back face too)
+  EXPECT_NEAR(q(12)[3], 0.3f, 1e-4f);  // heading up along it: it holds
+  expectVec(Vec3(q(12)[4], q(12)[5], q(12)[6]), Vec3(0, 0, 1));
   // Without an environment every query answers "nothing".
   ls.answerQueries(nullptr);
   EXPECT_EQ(q(2)[2], -1.0f);
