@@ -71,5 +71,28 @@ TEST(GrammarExamples, FlowerPolygonsAndTreeTropism) {
   EXPECT_LT(down, 0.0f);  // some branches hang below the horizontal
 }
 
+TEST(GrammarExamples, LychnisFlowersOnTheScheduleItsApicesImply) {
+  // ABOP ch. 3: the apex flowers in step 1; each flowering makes apices that flower 4 and 8
+  // steps later, so the flowers by step n number c(n) = 1 + c(n - 4) + c(n - 8) (0 for n < 1),
+  // and every flower comes with two leaves.
+  auto flowersBy = [](int n) {
+    std::vector<size_t> c(size_t(std::max(n, 0)) + 1, 0);
+    for (int k = 1; k <= n; ++k) c[size_t(k)] = 1 + (k > 4 ? c[size_t(k - 4)] : 0) + (k > 8 ? c[size_t(k - 8)] : 0);
+    return c[size_t(std::max(n, 0))];
+  };
+  LSystem ls(loadGrammarFile(test::grammarPath("abop-ch3-lychnis.ls")));
+  ASSERT_EQ(ls.derivationLength(), 26);
+  for (int n = 1; n <= 26; ++n) {
+    ls.step();
+    ASSERT_EQ(test::countOf(ls, "~K"), flowersBy(n)) << "after step " << n;
+    ASSERT_EQ(test::countOf(ls, "~leaf"), 2 * flowersBy(n)) << "after step " << n;
+  }
+  EXPECT_EQ(flowersBy(26), 33u);
+  plant::PlantModel p = ls.interpret();
+  EXPECT_EQ(p.leafCount(), 66u);
+  ASSERT_EQ(p.meshes.size(), 1u);  // the petals: five two-sided rhombi per flower
+  EXPECT_EQ(p.meshes[0].mesh.triangleCount(), 33u * 5 * 2 * 2);
+}
+
 }  // namespace
 }  // namespace tendril::lsystem
