@@ -110,7 +110,19 @@ TEST(GraphReader, ExpressionsAreCheckedWhenReadAndWhenEvaluated) {
     FAIL();
   } catch (const Error& e) {
     EXPECT_EQ(e.location(), "/components/0/params/child_scale");
-    EXPECT_NE(e.message().find("evaluates to -1, must be in [0, 1000]"), std::string::npos) << e.what();
+    EXPECT_EQ(e.message(), "expression \"1 - i\" evaluates to -1, must be in [0, 1000] for i=2, n=3, t=1, depth=0")
+        << e.what();
+  }
+  // Stem profile parameters also name the position along the stem.
+  auto profile = parse(R"j({"tendril_graph": 1, "root": {"links": ["c"]}, "components": [
+                          {"name": "c", "type": "tree", "params": {"segments": 10, "radius": "0.25 - s"}}]})j");
+  try {
+    graph::expand(profile);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.location(), "/components/0/params/radius");
+    EXPECT_NE(e.message().find("expression \"0.25 - s\" evaluates to -0.05"), std::string::npos) << e.what();
+    EXPECT_NE(e.message().find("s=0.3"), std::string::npos) << e.what();
   }
 }
 

@@ -46,6 +46,10 @@ TEST(GraphTropism, PhototropismFollowsTheWorldsLightField) {
   Vec3 tip = tipOf(stem(base, R"({"light": [1, 0, 0]})"));
   EXPECT_GT(tip.x(), 0.3f);
   EXPECT_NEAR(tip.z(), 0.0f, 1e-5f);
+  // A negative phototropism turns the stem away from the light by the same amount.
+  Vec3 away = tipOf(stem(R"({"length": 1, "segments": 20, "phototropism": -2})", R"({"light": [1, 0, 0]})"));
+  EXPECT_NEAR(away.x(), -tip.x(), 1e-4f);
+  EXPECT_NEAR(away.y(), tip.y(), 1e-4f);
   // A field given as functions of the position: light from a point at (0, 1, -3).
   Vec3 toward = tipOf(stem(base, R"({"light": ["-x", "1 - y", "-3 - z"]})"));
   EXPECT_LT(toward.z(), -0.2f);

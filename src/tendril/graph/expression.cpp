@@ -238,17 +238,20 @@ double Expression::eval(const EvalVars& vars, const RandomKey* key) const {
   } catch (const mu::Parser::exception_type& e) {
     throw Error(source_, pointer_, fmt::format("expression \"{}\": {}", text_, e.GetMsg()));
   }
-  if (!std::isfinite(value)) {
-    std::string inputs;
-    const double values[] = {vars.i, vars.n, vars.t, vars.depth, vars.v, vars.s, vars.x, vars.y, vars.z};
-    for (size_t k = 0; k < kVarNames.size(); ++k)
-      if (vars_ & kVarNames[k].mask) inputs += fmt::format("{}{}={}", inputs.empty() ? "" : ", ", kVarNames[k].name, values[k]);
+  if (!std::isfinite(value))
     throw Error(source_, pointer_,
                 fmt::format("expression \"{}\" evaluates to {} (division by zero or a function outside its domain?) for "
                             "{}",
-                            text_, value, inputs.empty() ? std::string("no inputs") : inputs));
-  }
+                            text_, value, inputs(vars)));
   return value;
+}
+
+std::string Expression::inputs(const EvalVars& vars) const {
+  std::string out;
+  const double values[] = {vars.i, vars.n, vars.t, vars.depth, vars.v, vars.s, vars.x, vars.y, vars.z};
+  for (size_t k = 0; k < kVarNames.size(); ++k)
+    if (vars_ & kVarNames[k].mask) out += fmt::format("{}{}={}", out.empty() ? "" : ", ", kVarNames[k].name, values[k]);
+  return out.empty() ? std::string("no inputs") : out;
 }
 
 }  // namespace tendril::graph

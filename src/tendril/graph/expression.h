@@ -58,6 +58,9 @@ class Expression {
   // when usesRandom() is false). A result that is not finite is an Error naming the
   // expression and the variables.
   double eval(const EvalVars& vars, const RandomKey* key) const;
+  // The variables this expression may use and their values, e.g. "i=2, n=5, t=0.5, depth=0"
+  // (for messages).
+  std::string inputs(const EvalVars& vars) const;
 
   bool usesRandom() const { return usesRandom_; }
   // No variables and no random functions: the value never changes.

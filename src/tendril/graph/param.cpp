@@ -292,6 +292,12 @@ double ParamEvaluator::eval(const ParamDef& p, EvalVars vars, double natural, co
   if (p.integer) value = std::round(value);
   if (!(value >= p.min && value <= p.max)) {
     const Location& where = table_.location(p.location);
+    if (p.expression >= 0) {
+      const Expression& e = *expressions_[size_t(p.expression)];
+      throw Error(where.source, where.pointer,
+                  fmt::format("expression \"{}\" evaluates to {}, must be {} for {}", e.text(), value,
+                              rangeText(p.min, p.max), e.inputs(vars)));
+    }
     throw Error(where.source, where.pointer,
                 fmt::format("evaluates to {}, must be {} (i={}, n={}, depth={})", value, rangeText(p.min, p.max),
                             vars.i, vars.n, vars.depth));
