@@ -57,6 +57,10 @@ TEST(GraphCli, BadInputIsOneLineAndExitCodeTwo) {
   expectOneLineError(runTendril("model " + quoted(dir / "typo.json") + " -o " + quoted(dir / "x.glb"), dir),
                      "tendril: error: " + (dir / "typo.json").string() +
                          ":/components/0/params/lenght: unknown key \"lenght\" (did you mean \"length\"?)");
+  // A file that is not JSON at all is reported at its line and column.
+  test::writeText(dir / "broken.json", "{\"tendril_graph\": 1,\n \"components\": [{\"name\": \"s\",, }]}");
+  expectOneLineError(runTendril("model " + quoted(dir / "broken.json") + " -o " + quoted(dir / "x.glb"), dir),
+                     "tendril: error: " + (dir / "broken.json").string() + ":2:30: syntax error");
   test::writeText(dir / "divide.json", R"j({"tendril_graph": 1, "root": {"links": ["h"]},
     "components": [{"name": "h", "type": "hydra", "params": {"count": 4, "angle": "90 / (i - 1)"}}]})j");
   expectOneLineError(runTendril("model " + quoted(dir / "divide.json") + " -o " + quoted(dir / "x.glb"), dir),
