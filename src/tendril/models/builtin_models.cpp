@@ -4,6 +4,7 @@
 #include "tendril/graph/graph_model.h"
 #include "tendril/lsystem/lsystem_model.h"
 #include "tendril/models/registry.h"
+#include "tendril/particles/particle_model.h"
 
 namespace tendril::models {
 
@@ -11,6 +12,7 @@ std::span<const ModelType> modelTypes() {
   static const ModelType kTypes[] = {
       climb::climbModelType(),
       graph::graphModelType(),
+      particles::particleModelType(),
       lsystem::lsystemModelType(),
   };
   return kTypes;

@@ -1,0 +1,169 @@
+// Collision response of seed 000 §5.2: obstacles through their signed distance fields, other
+// particles (of any plant, including the same one) through a spatial hash.
+#include "tendril/core/parallel.h"
+#include "tendril/particles/world.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tendril::particles {
+
+namespace {
+
+// Closest points between segments p1q1 and p2q2 (Ericson, Real-Time Collision Detection §5.1.9).
+void closestSegmentPoints(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2, Vec3* c1, Vec3* c2) {
+  const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
+  const float a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  float s = 0.0f, t = 0.0f;
+  if (a <= 1e-12f && e <= 1e-12f) {
+    *c1 = p1;
+    *c2 = p2;
+    return;
+  }
+  if (a <= 1e-12f) {
+    t = std::clamp(f / e, 0.0f, 1.0f);
+  } else {
+    const float c = d1.dot(r);
+    if (e <= 1e-12f) {
+      s = std::clamp(-c / a, 0.0f, 1.0f);
+    } else {
+      const float b = d1.dot(d2), denom = a * e - b * b;
+      s = denom > 1e-12f ? std::clamp((b * f - c * e) / denom, 0.0f, 1.0f) : 0.0f;
+      t = (b * s + f) / e;
+      if (t < 0.0f) {
+        t = 0.0f;
+        s = std::clamp(-c / a, 0.0f, 1.0f);
+      } else if (t > 1.0f) {
+        t = 1.0f;
+        s = std::clamp((b - c) / a, 0.0f, 1.0f);
+      }
+    }
+  }
+  *c1 = p1 + d1 * s;
+  *c2 = p2 + d2 * t;
+}
+
+}  // namespace
+
+void ParticleWorld::collideObstacles(const env::Environment& env) {
+  correction_.assign(capacity(), Vec3::Zero());
+  if (env.obstacleCount() == 0) return;
+  // The particle is a capsule along its long axis: test its centre and both ends against the
+  // SDF (the paper tests the distance against the longest axis) and push the whole particle
+  // out along the surface normal. The push is kept for the velocity response in integrate().
+  parallelFor(0, capacity(), [&](size_t i) {
+    if (!(flags_[i] & kActive) || (flags_[i] & kRoot)) return;
+    const Vec3 axis = qp_[i] * Vec3(0, a_[i], 0);
+    const Vec3 samples[3] = {xp_[i], xp_[i] + axis, xp_[i] - axis};
+    Vec3 push = Vec3::Zero();
+    for (const Vec3& p : samples) {
+      Vec3 g;
+      float d = env.signedDistance(p + push, &g);
+      const float depth = b_[i] - d;
+      if (depth > 0.0f && g.squaredNorm() > 0.0f) push += g * depth;
+    }
+    if (push.squaredNorm() > 0.0f) {
+      xp_[i] += push;
+      correction_[i] = push;
+    }
+  }, 256);
+}
+
+void ParticleWorld::collideParticles() {
+  // Stems collide with stems of any plant (§5.2: "plants resolve collisions with other plants
+  // and themselves"); leaves collide with obstacles only — a mat of overlapping leaves is what
+  // ivy looks like, and pushing every blade apart only makes it jitter.
+  const size_t n = capacity();
+  std::vector<uint32_t>& stems = hashParticles_;
+  stems.clear();
+  float maxReach = 0.0f;
+  for (uint32_t i = 0; i < n; ++i)
+    if ((flags_[i] & kActive) && !(flags_[i] & kLeaf)) {
+      stems.push_back(i);
+      maxReach = std::max(maxReach, a_[i] + b_[i]);
+    }
+  if (stems.size() < 2 || maxReach <= 0.0f) {
+    hashEntries_.clear();
+    return;
+  }
+  // Any touching pair lies in neighbouring cells of this size. Cells go into a hash table
+  // twice as large as the particle count; entries are placed by a counting sort in particle
+  // order, so the table is the same whatever the thread count.
+  const float inv = 1.0f / (2.0f * maxReach);
+  hashInv_ = inv;
+  auto cellOf = [&](const Vec3& p) {
+    return Eigen::Vector3i(int(std::floor(p.x() * inv)), int(std::floor(p.y() * inv)), int(std::floor(p.z() * inv)));
+  };
+  uint32_t tableSize = 64;
+  while (tableSize < 2 * stems.size()) tableSize *= 2;
+  const uint32_t mask = tableSize - 1;
+  std::vector<uint32_t>& bucket = hashBucket_;
+  bucket.resize(stems.size());
+  parallelFor(0, stems.size(), [&](size_t k) { bucket[k] = spatialHash(cellOf(xp_[stems[k]]), mask); }, 4096);
+  std::vector<uint32_t>& start = hashStart_;
+  start.assign(tableSize + 1, 0);
+  for (uint32_t b : bucket) ++start[b + 1];
+  for (uint32_t t = 0; t < tableSize; ++t) start[t + 1] += start[t];
+  std::vector<uint32_t>& entries = hashEntries_;
+  entries.resize(stems.size());
+  {
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (size_t k = 0; k < stems.size(); ++k) entries[fill[bucket[k]]++] = stems[k];
+  }
+
+  // Particles within two generations of each other meet at joints by construction.
+  auto related = [&](uint32_t i, uint32_t j) {
+    const uint32_t pi = parent_[i], pj = parent_[j];
+    const uint32_t ppi = pi == kNone ? kNone : parent_[pi], ppj = pj == kNone ? kNone : parent_[pj];
+    const uint32_t ai[3] = {i, pi, ppi}, aj[3] = {j, pj, ppj};
+    for (uint32_t x : ai)
+      for (uint32_t y : aj)
+        if (x != kNone && x == y) return true;
+    return false;
+  };
+
+  goal_.resize(n);
+  parallelFor(0, n, [&](size_t ii) {
+    const uint32_t i = uint32_t(ii);
+    goal_[i] = xp_[i];
+    if (!(flags_[i] & kActive) || (flags_[i] & (kRoot | kLeaf))) return;
+    const Vec3 axisI = qp_[i] * Vec3(0, a_[i], 0);
+    const Vec3 ai = xp_[i] - axisI, bi = xp_[i] + axisI;
+    const Eigen::Vector3i c = cellOf(xp_[i]);
+    // The 27 neighbouring cells' buckets, each visited once even where cells share a bucket.
+    uint32_t buckets[27];
+    int count = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const uint32_t h = spatialHash(c + Eigen::Vector3i(dx, dy, dz), mask);
+          if (std::find(buckets, buckets + count, h) == buckets + count) buckets[count++] = h;
+        }
+    Vec3 push = Vec3::Zero();
+    const float reachI = a_[i] + b_[i];
+    for (int k = 0; k < count; ++k)
+      for (uint32_t e = start[buckets[k]]; e < start[buckets[k] + 1]; ++e) {
+        const uint32_t j = entries[e];
+        if (j == i) continue;
+        const float reach = reachI + a_[j] + b_[j];
+        if ((xp_[j] - xp_[i]).squaredNorm() > reach * reach || related(i, j)) continue;
+        const Vec3 axisJ = qp_[j] * Vec3(0, a_[j], 0);
+        Vec3 ci, cj;
+        closestSegmentPoints(ai, bi, xp_[j] - axisJ, xp_[j] + axisJ, &ci, &cj);
+        const Vec3 d = ci - cj;
+        const float dist = d.norm(), minDist = b_[i] + b_[j];
+        if (dist >= minDist || dist < 1e-9f) continue;
+        // Displace along the contact normal, in proportion to the other's mass; each side
+        // moves half, as the other particle does the same from its side.
+        const float share = m_[j] / (m_[i] + m_[j]);
+        push += d / dist * (0.5f * (minDist - dist) * share);
+      }
+    // Never more than a radius per step: a deep tangle resolves over a few steps.
+    const float len = push.norm();
+    if (len > b_[i]) push *= b_[i] / len;
+    goal_[i] = xp_[i] + push;
+  }, 256);
+  std::swap(xp_, goal_);
+}
+
+}  // namespace tendril::particles

@@ -1,0 +1,96 @@
+#include "tendril/particles/particle_model.h"
+
+#include "tendril/core/embedded.h"
+#include "tendril/core/error.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+namespace tendril::particles {
+
+namespace {
+
+void readSpeciesDocument(const Json& json, const std::string& source, const std::filesystem::path& dir,
+                         ParticleSpecies& s) {
+  JsonObject o(json, source);
+  std::string model = o.string("model", "");
+  if (model != "particles")
+    throw o.error("model", fmt::format("this species is for the \"{}\" model, not \"particles\"", model));
+  readParticleSpecies(o, s, dir.string());
+  o.finish();
+}
+
+std::shared_ptr<const scene::ModelParams> readParticlePlant(JsonObject& o, const std::filesystem::path& baseDir) {
+  auto params = std::make_shared<ParticleParams>();
+  const Json* sp = o.find("species");
+  if (!sp) {
+    params->species = loadSpecies("ivy-particles", baseDir, o.source(), o.pointerTo("species"));
+  } else if (sp->is_string()) {
+    params->species = loadSpecies(sp->get<std::string>(), baseDir, o.source(), o.pointerTo("species"));
+  } else if (sp->is_object()) {
+    JsonObject so(*sp, o.source(), o.pointerTo("species"));
+    std::string base = so.string("base", "ivy-particles");
+    params->species = loadSpecies(base, baseDir, o.source(), so.pointerTo("base"));
+    readParticleSpecies(so, params->species, baseDir.string());
+    so.finish();
+  } else {
+    throw o.error("species", "expected a species name, a .json path or an object, got " + describeJson(*sp));
+  }
+  return params;
+}
+
+}  // namespace
+
+ParticleSpecies loadSpecies(const std::string& ref, const std::filesystem::path& baseDir, const std::string& source,
+                            const std::string& pointer) {
+  bool isPath = ref.find('/') != std::string::npos || (ref.size() > 5 && ref.compare(ref.size() - 5, 5, ".json") == 0);
+  ParticleSpecies s;
+  if (!isPath) {
+    const EmbeddedFile* f = findEmbeddedFile("species/" + ref + ".json");
+    if (!f) {
+      std::string names;
+      for (const EmbeddedFile& e : embeddedFiles()) {
+        if (e.path.rfind("species/", 0) != 0) continue;
+        if (e.contents.find("\"model\": \"particles\"") == std::string_view::npos) continue;
+        names += (names.empty() ? "" : ", ") + std::string(e.path.substr(8, e.path.size() - 13));
+      }
+      throw Error(source, pointer,
+                  fmt::format("unknown particle species \"{}\" (built-in: {}; or give a path to a .json file)", ref,
+                              names));
+    }
+    std::string name = "<built-in>/" + std::string(f->path);
+    try {
+      readSpeciesDocument(parseJson(f->contents, name), name, "", s);
+    } catch (const Error& e) {
+      throw Error(source, pointer, e.what());
+    }
+    return s;
+  }
+  std::filesystem::path p = std::filesystem::path(ref).is_absolute() ? std::filesystem::path(ref) : baseDir / ref;
+  if (!std::filesystem::exists(p)) throw Error(source, pointer, fmt::format("species file {} does not exist", p.string()));
+  readSpeciesDocument(readJsonFile(p), p.string(), p.parent_path(), s);
+  return s;
+}
+
+ParticlePlantSystem::ParticlePlantSystem(const models::SystemContext& context) {
+  WorldSettings s;
+  s.seed = context.sceneSeed;
+  world_.setSettings(s);
+}
+
+void ParticlePlantSystem::addPlant(const scene::PlantSpec& spec, const env::Environment& env) {
+  const auto* params = spec.paramsAs<ParticleParams>();
+  world_.addPlant(spec.name, params ? params->species : ParticleSpecies(), spec.position, spec.direction, spec.seed,
+                  env);
+}
+
+void ParticlePlantSystem::step(const env::Environment& env) { world_.step(env); }
+
+models::ModelType particleModelType() {
+  return {"particles",
+          "oriented-particle plants after seed 000 (growth, shape-matching dynamics, anchors, collisions, breaking)",
+          readParticlePlant,
+          [](const models::SystemContext& c) { return std::make_unique<ParticlePlantSystem>(c); }};
+}
+
+}  // namespace tendril::particles

@@ -1,0 +1,371 @@
+#include "tendril/particles/world.h"
+
+#include "tendril/core/error.h"
+#include "tendril/core/log.h"
+#include "tendril/core/timer.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace tendril::particles {
+
+ParticleWorld::ParticleWorld(WorldSettings settings) : settings_(settings) {}
+
+uint32_t ParticleWorld::allocate() {
+  uint32_t i;
+  if (!freeList_.empty()) {
+    // Reuse the lowest free slot, so slot order does not depend on the order pieces died in.
+    auto it = std::min_element(freeList_.begin(), freeList_.end());
+    i = *it;
+    *it = freeList_.back();
+    freeList_.pop_back();
+  } else {
+    i = static_cast<uint32_t>(flags_.size());
+    const size_t n = i + 1;
+    x_.resize(n), xp_.resize(n), v_.resize(n), w_.resize(n), xr_.resize(n);
+    q_.resize(n), qp_.resize(n), qr_.resize(n), groupRotation_.resize(n);
+    a_.resize(n), b_.resize(n), m_.resize(n), age_.resize(n);
+    flags_.resize(n), plant_.resize(n), parent_.resize(n), firstChild_.resize(n), nextSibling_.resize(n);
+    targetHalfLength_.resize(n), restTime_.resize(n), anchor_.resize(n), anchorPhi_.resize(n);
+    branchIndex_.resize(n), order_.resize(n), leafShape_.resize(n), leafTarget_.resize(n);
+  }
+  x_[i] = xp_[i] = v_[i] = w_[i] = xr_[i] = anchor_[i] = Vec3::Zero();
+  q_[i] = qp_[i] = qr_[i] = groupRotation_[i] = Quat::Identity();
+  a_[i] = b_[i] = m_[i] = age_[i] = targetHalfLength_[i] = restTime_[i] = anchorPhi_[i] = leafTarget_[i] = 0.0f;
+  flags_[i] = kActive;
+  plant_[i] = 0;
+  parent_[i] = firstChild_[i] = nextSibling_[i] = kNone;
+  branchIndex_[i] = 0;
+  order_[i] = 0;
+  leafShape_[i] = 0;
+  ++active_;
+  return i;
+}
+
+void ParticleWorld::release(uint32_t i) {
+  // Children become roots of their own (detached) pieces.
+  for (uint32_t c = firstChild_[i]; c != kNone;) {
+    uint32_t next = nextSibling_[c];
+    parent_[c] = kNone;
+    nextSibling_[c] = kNone;
+    flags_[c] |= kDetached;
+    c = next;
+  }
+  firstChild_[i] = kNone;
+  unlink(i);
+  if (plant_[i] < plants_.size() && plants_[plant_[i]].particles > 0) --plants_[plant_[i]].particles;
+  flags_[i] = 0;
+  if (dragParticle_ == i) dragParticle_ = kNone;
+  std::erase_if(leaves_, [i](const AttachedLeaf& l) { return l.particle == i; });
+  freeList_.push_back(i);
+  --active_;
+}
+
+void ParticleWorld::link(uint32_t parent, uint32_t child) {
+  parent_[child] = parent;
+  nextSibling_[child] = kNone;
+  // Append, so children stay in creation order.
+  if (firstChild_[parent] == kNone) {
+    firstChild_[parent] = child;
+  } else {
+    uint32_t c = firstChild_[parent];
+    while (nextSibling_[c] != kNone) c = nextSibling_[c];
+    nextSibling_[c] = child;
+  }
+}
+
+void ParticleWorld::unlink(uint32_t child) {
+  uint32_t p = parent_[child];
+  if (p == kNone) return;
+  if (firstChild_[p] == child) {
+    firstChild_[p] = nextSibling_[child];
+  } else {
+    for (uint32_t c = firstChild_[p]; c != kNone; c = nextSibling_[c])
+      if (nextSibling_[c] == child) {
+        nextSibling_[c] = nextSibling_[child];
+        break;
+      }
+  }
+  parent_[child] = kNone;
+  nextSibling_[child] = kNone;
+}
+
+void ParticleWorld::updateMass(uint32_t i) {
+  // Eq. 2: m = V ρ = 4/3 π a b c ρ, with b = c.
+  const float density = plants_[plant_[i]].species.density;
+  m_[i] = std::max(1e-9f, 4.0f / 3.0f * kPi * std::max(a_[i], 1e-4f) * b_[i] * b_[i] * density);
+}
+
+float ParticleWorld::stiffnessOf(uint32_t i) const {
+  // §4.3: s = t_l / t_m clamped to [0, 1], starting from `stiffnessStart` at birth (the paper
+  // initialises t_l = 0.2 and increases it over 10 s), scaled by the species' stiffness.
+  const ParticleSpecies& s = plants_[plant_[i]].species;
+  float ramp = std::clamp(s.stiffnessStart + (1.0f - s.stiffnessStart) * age_[i] / s.stiffnessTime, 0.0f, 1.0f);
+  return ramp * s.stiffness;
+}
+
+uint32_t ParticleWorld::spawn(uint32_t plant, uint32_t parent, Quat orientation, Quat restOrientation,
+                              float radius, uint32_t flags) {
+  uint32_t i = allocate();
+  plant_[i] = plant;
+  flags_[i] |= flags;
+  q_[i] = qp_[i] = orientation.normalized();
+  qr_[i] = restOrientation.normalized();
+  b_[i] = std::max(radius, plants_[plant].species.minRadius);
+  const float full = 0.5f * plants_[plant].species.particleLength;
+  targetHalfLength_[i] = full;
+  a_[i] = (flags & kRoot) ? b_[i] : 0.1f * full;
+  if (parent != kNone) {
+    link(parent, i);
+    x_[i] = head(parent) + q_[i] * Vec3(0, a_[i], 0);
+    xr_[i] = xr_[parent] + qr_[parent] * Vec3(0, a_[parent], 0) + qr_[i] * Vec3(0, a_[i], 0);
+    order_[i] = order_[parent];
+    v_[i] = v_[parent];
+  }
+  xp_[i] = x_[i];
+  groupRotation_[i] = (q_[i] * qr_[i].conjugate()).normalized();
+  updateMass(i);
+  ++plants_[plant].particles;
+  return i;
+}
+
+uint32_t ParticleWorld::addPlant(const std::string& name, const ParticleSpecies& species, const Vec3& position,
+                                 const Vec3& direction, uint64_t seed, const env::Environment& env) {
+  if (env.exactSignedDistance(position, 1.0f) < 0.0f)
+    throw Error(name, "", fmt::format("seed position ({:.3g}, {:.3g}, {:.3g}) lies inside an obstacle", position.x(),
+                                      position.y(), position.z()));
+  env.buildDistanceFields();  // collisions read them every step
+  Plant p;
+  p.name = name;
+  p.species = species;
+  p.seed = seed;
+  plants_.push_back(std::move(p));
+  const uint32_t id = static_cast<uint32_t>(plants_.size() - 1);
+
+  Vec3 dir = direction.normalized();
+  Vec3 zHint = anyPerpendicular(dir);
+  Vec3 pos = position;
+  if (auto sp = env.closestPoint(position, species.radius)) {
+    // Seeds on a surface sit one radius above it.
+    pos = sp->point + sp->away * species.radius;
+    zHint = sp->away;
+  }
+  const Quat frame = frameFromYZ(dir, zHint);
+  uint32_t root = spawn(id, kNone, frame, frame, species.radius, kRoot);
+  x_[root] = xp_[root] = xr_[root] = pos;
+  plants_[id].root = root;
+  uint32_t apex = spawn(id, root, frame, frame, species.radius * species.apexTaper, kApex);
+  branchIndex_[apex] = 1;
+  (void)apex;
+  return id;
+}
+
+void ParticleWorld::setSpecies(uint32_t plant, const ParticleSpecies& species) {
+  plants_.at(plant).species = species;
+  for (uint32_t i = 0; i < capacity(); ++i)
+    if ((flags_[i] & kActive) && plant_[i] == plant) {
+      targetHalfLength_[i] = 0.5f * species.particleLength;
+      updateMass(i);
+    }
+}
+
+size_t ParticleWorld::particleCount(uint32_t plant) const { return plants_.at(plant).particles; }
+
+float ParticleWorld::strain(uint32_t i) const {
+  uint32_t p = parent_[i];
+  if (p == kNone) return 0.0f;
+  float rest = (xr_[i] - xr_[p]).norm();
+  if (!(rest > 0.0f)) return 0.0f;
+  return std::abs((x_[i] - x_[p]).norm() - rest) / rest;
+}
+
+double ParticleWorld::kineticEnergy() const {
+  double e = 0.0;
+  for (uint32_t i = 0; i < capacity(); ++i) {
+    if (!(flags_[i] & kActive)) continue;
+    // Rotational energy of a solid ellipsoid: I = m/5 (b² + c²) etc.; with b = c about the
+    // long axis and m/5 (a² + b²) about the others. An upper bound is enough here.
+    const double inertia = m_[i] / 5.0 * (double(a_[i]) * a_[i] + double(b_[i]) * b_[i]);
+    e += 0.5 * m_[i] * v_[i].squaredNorm() + 0.5 * inertia * w_[i].squaredNorm();
+  }
+  return e;
+}
+
+void ParticleWorld::setDrag(uint32_t particle, const Vec3& target, float strength) {
+  if (particle >= capacity() || !(flags_[particle] & kActive)) {
+    dragParticle_ = kNone;
+    return;
+  }
+  dragParticle_ = particle;
+  dragTarget_ = target;
+  dragStrength_ = std::clamp(strength, 0.0f, 1.0f);
+}
+
+void ParticleWorld::clearDrag() { dragParticle_ = kNone; }
+
+void ParticleWorld::markDetached(uint32_t root) {
+  std::vector<uint32_t> stack = {root};
+  while (!stack.empty()) {
+    uint32_t i = stack.back();
+    stack.pop_back();
+    flags_[i] |= kDetached;
+    flags_[i] &= ~(kApex | kAnchored);
+    anchorPhi_[i] = 0.0f;
+    restTime_[i] = 0.0f;
+    for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) stack.push_back(c);
+  }
+}
+
+void ParticleWorld::cut(uint32_t particle) {
+  if (particle >= capacity() || !(flags_[particle] & kActive) || (flags_[particle] & kRoot)) return;
+  unlink(particle);
+  markDetached(particle);
+}
+
+uint32_t ParticleWorld::seedBranch(uint32_t particle, const Vec3& direction) {
+  if (particle >= capacity() || !(flags_[particle] & kActive) || (flags_[particle] & (kDetached | kLeaf)))
+    return kNone;
+  const uint32_t plant = plant_[particle];
+  const ParticleSpecies& s = plants_[plant].species;
+  Vec3 dir = direction.squaredNorm() > 0.0f ? Vec3(direction.normalized()) : Vec3(q_[particle] * Vec3::UnitY());
+  Quat q = frameFromYZ(dir, q_[particle] * Vec3::UnitZ());
+  // The same turn, expressed in the rest frame, keeps the particle's deformation.
+  Quat deformation = q_[particle] * qr_[particle].conjugate();
+  Quat qr = deformation.conjugate() * q;
+  uint32_t i = spawn(plant, particle, q, qr, b_[particle] * s.thicknessFalloff, kApex);
+  order_[i] = static_cast<uint16_t>(order_[particle] + 1);
+  branchIndex_[i] = 1;
+  return i;
+}
+
+void ParticleWorld::removeRestingPieces() {
+  for (uint32_t i = 0; i < capacity(); ++i)
+    if ((flags_[i] & kActive) && (flags_[i] & kResting)) release(i);
+}
+
+void ParticleWorld::updateRestingPieces() {
+  const float dt = settings_.dt;
+  for (uint32_t i = 0; i < capacity(); ++i) {
+    if (!(flags_[i] & kActive) || !(flags_[i] & kDetached)) continue;
+    if (v_[i].norm() < settings_.restingSpeed) {
+      restTime_[i] += dt;
+    } else {
+      restTime_[i] = 0.0f;
+    }
+    if (restTime_[i] >= settings_.restingTime) flags_[i] |= kResting;
+  }
+  if (settings_.removeRestingAfter > 0.0f) {
+    const float limit = settings_.restingTime + settings_.removeRestingAfter;
+    for (uint32_t i = 0; i < capacity(); ++i)
+      if ((flags_[i] & kActive) && (flags_[i] & kResting) && restTime_[i] >= limit) release(i);
+  }
+}
+
+void ParticleWorld::step(const env::Environment& env) {
+  if (externalAcceleration_.size() != capacity()) externalAcceleration_.resize(capacity(), Vec3::Zero());
+  {
+    Timer t;
+    grow(env);
+    timings_.growth = t.seconds();
+  }
+  if (externalAcceleration_.size() != capacity()) externalAcceleration_.resize(capacity(), Vec3::Zero());
+  {
+    Timer t;
+    predict();
+    applyAnchors(env);
+    shapeMatch();
+    timings_.dynamics = t.seconds();
+  }
+  {
+    Timer t;
+    collideObstacles(env);
+    if (settings_.plantCollisions) collideParticles();
+    timings_.collisions = t.seconds();
+  }
+  {
+    Timer t;
+    integrate();
+    breakConnections();
+    updateRestingPieces();
+    timings_.breaking = t.seconds();
+  }
+  time_ += settings_.dt;
+  ++step_;
+}
+
+plant::PlantModel ParticleWorld::snapshot(uint32_t plantId) const {
+  const Plant& pl = plants_.at(plantId);
+  plant::PlantModel m;
+  m.name = pl.name;
+  m.species = pl.species.name;
+  m.bark = pl.species.bark;
+  m.leafShapes = pl.species.leafShapes;
+
+  std::vector<int32_t> node(capacity(), -1);
+  auto addTree = [&](uint32_t root, bool broken) {
+    std::vector<uint32_t> stack = {root};
+    while (!stack.empty()) {
+      uint32_t i = stack.back();
+      stack.pop_back();
+      if (flags_[i] & kLeaf) continue;
+      plant::PlantModel::NodeDef d;
+      d.orientation = q_[i];
+      d.length = 2.0f * a_[i];
+      d.position = x_[i] - q_[i] * Vec3(0, a_[i], 0);
+      d.radius = b_[i];
+      d.parent = parent_[i] == kNone ? -1 : node[parent_[i]];
+      d.age = age_[i];
+      d.order = order_[i];
+      d.flags = 0;
+      if (flags_[i] & kApex) d.flags |= plant::kNodeApex;
+      if (flags_[i] & kAnchored) d.flags |= plant::kNodeAnchored;
+      if (broken) d.flags |= plant::kNodeBroken;
+      if (parent_[i] != kNone && order_[i] > order_[parent_[i]]) d.flags |= plant::kNodeBranchStart;
+      node[i] = m.addNode(d);
+      // Children in reverse so they come out in creation order.
+      std::vector<uint32_t> kids;
+      for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) kids.push_back(c);
+      for (auto it = kids.rbegin(); it != kids.rend(); ++it) stack.push_back(*it);
+    }
+  };
+  if (pl.root != kNone && (flags_[pl.root] & kActive)) addTree(pl.root, false);
+  for (uint32_t i = 0; i < capacity(); ++i)
+    if ((flags_[i] & kActive) && plant_[i] == plantId && (flags_[i] & kDetached) && parent_[i] == kNone &&
+        !(flags_[i] & kLeaf))
+      addTree(i, true);
+
+  // Leaves: attached records and leaf particles, both relative to their branch node.
+  for (const AttachedLeaf& l : leaves_) {
+    if (plant_[l.particle] != plantId || node[l.particle] < 0 || l.size <= 0.0f) continue;
+    plant::PlantModel::LeafDef d;
+    d.node = node[l.particle];
+    d.offset = Vec3(0, 2.0f * a_[l.particle], b_[l.particle]) ;
+    d.rotation = l.particleFromLeaf;
+    d.size = l.size;
+    d.petiole = pl.species.leafPetiole * (l.size / std::max(l.maxSize, 1e-6f));
+    d.thickness = pl.species.leafThickness;
+    d.shape = l.shape;
+    m.addLeaf(d);
+  }
+  for (uint32_t i = 0; i < capacity(); ++i) {
+    if (!(flags_[i] & kActive) || !(flags_[i] & kLeaf) || plant_[i] != plantId) continue;
+    uint32_t p = parent_[i];
+    if (p == kNone || node[p] < 0) continue;
+    const Vec3 base = x_[i] - q_[i] * Vec3(0, a_[i], 0);
+    const Vec3 nodeBase = x_[p] - q_[p] * Vec3(0, a_[p], 0);
+    plant::PlantModel::LeafDef d;
+    d.node = node[p];
+    d.offset = q_[p].conjugate() * (base - nodeBase);
+    d.rotation = (q_[p].conjugate() * q_[i]).normalized();
+    d.size = 2.0f * a_[i];
+    d.petiole = 0.0f;
+    d.thickness = pl.species.leafThickness;
+    d.shape = leafShape_[i];
+    m.addLeaf(d);
+  }
+  return m;
+}
+
+}  // namespace tendril::particles

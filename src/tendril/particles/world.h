@@ -1,0 +1,218 @@
+// Plants as chains of oriented, anisotropic particles (seed 000: Hädrich, Beneš, Deussen,
+// Pirk — Interactive Modeling and Authoring of Climbing Plants).
+//
+// Every plant's particles live in one set of dense arrays with active/inactive slots that are
+// reused, as the paper's single particle buffer. A particle is one internode: an ellipsoid
+// with long half-axis `halfLength` along its local +Y (the growth direction) and radius b = c.
+// Its group is {parent, itself, children}; each step predicts positions (eq. 1, 16), matches
+// every group's rest shape (eq. 3, 14–15, with a rotation extraction that stays stable for
+// collinear chains), blends the targets into goals (eq. 4) with age-dependent stiffness
+// (§4.3), applies anchors (eq. 5), resolves collisions with obstacle SDFs and with other
+// particles (§5.2), integrates (eq. 17–20) and breaks over-stretched connections (§4.3).
+// Growth (§4.2) elongates apices, spawns successors and lateral branches, turns apices toward
+// surfaces and light (eq. 6–10), thickens older particles and grows leaves.
+//
+// All parallel loops write only to their own particle's slots and read the previous state, and
+// topology changes are made sequentially in particle order: results are bit-identical for any
+// thread count. Random numbers are keyed by (seed, plant, particle, step, purpose).
+#pragma once
+
+#include "tendril/env/environment.h"
+#include "tendril/particles/species.h"
+#include "tendril/plant/plant_model.h"
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace tendril::particles {
+
+inline constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
+
+// Spatial hash of a grid cell (Teschner et al. 2003); `mask` is the table size − 1.
+inline uint32_t spatialHash(const Eigen::Vector3i& c, uint32_t mask) {
+  return (uint32_t(c.x()) * 73856093u ^ uint32_t(c.y()) * 19349663u ^ uint32_t(c.z()) * 83492791u) & mask;
+}
+
+enum ParticleFlags : uint32_t {
+  kActive = 1u << 0,
+  kApex = 1u << 1,      // growing tip of a branch
+  kLeaf = 1u << 2,      // a leaf particle (small plants)
+  kGrown = 1u << 3,     // reached its full length
+  kRoot = 1u << 4,      // a plant's seed particle, held in place
+  kDetached = 1u << 5,  // belongs to a piece that broke off
+  kResting = 1u << 6,   // a fallen piece that has come to rest
+  kAnchored = 1u << 7,  // held to a surface by an anchor
+};
+
+struct WorldSettings {
+  float dt = 0.025f;                  // physics step (s), as in seed 000 §6
+  Vec3 gravity = Vec3(0, -9.81f, 0);  // m/s²
+  int iterations = 2;                 // shape-matching passes per step
+  bool plantCollisions = true;        // plant–plant and self collisions
+  float restingSpeed = 0.05f;         // a fallen piece slower than this (m/s)...
+  float restingTime = 1.0f;           // ...for this long (s) is at rest
+  float removeRestingAfter = 3.0f;    // resting pieces disappear after this long (s); 0 keeps them
+  uint64_t seed = 1;                  // scene seed
+};
+
+struct StepTimings {
+  double growth = 0, dynamics = 0, collisions = 0, breaking = 0;  // seconds of the last step
+};
+
+// A leaf attached to a branch particle (large plants): it follows the particle rigidly.
+struct AttachedLeaf {
+  uint32_t particle = kNone;
+  Quat particleFromLeaf = Quat::Identity();
+  float size = 0.0f;     // current blade length (m)
+  float maxSize = 0.0f;  // full-grown blade length (m)
+  uint16_t shape = 0;
+};
+
+class ParticleWorld {
+ public:
+  explicit ParticleWorld(WorldSettings settings = {});
+
+  // --- plants ---
+  // Seeds a plant: a root particle held at `position` and a first apex growing along
+  // `direction`. Throws Error when the position lies inside an obstacle.
+  uint32_t addPlant(const std::string& name, const ParticleSpecies& species, const Vec3& position,
+                    const Vec3& direction, uint64_t seed, const env::Environment& env);
+  size_t plantCount() const { return plants_.size(); }
+  const std::string& plantName(uint32_t plant) const { return plants_[plant].name; }
+  const ParticleSpecies& species(uint32_t plant) const { return plants_[plant].species; }
+  // Replaces a plant's species (live parameter edits).
+  void setSpecies(uint32_t plant, const ParticleSpecies& species);
+
+  // --- simulation ---
+  void step(const env::Environment& env);
+  float time() const { return time_; }
+  uint32_t stepCount() const { return step_; }
+  const WorldSettings& settings() const { return settings_; }
+  void setSettings(const WorldSettings& s) { settings_ = s; }
+  const StepTimings& timings() const { return timings_; }
+  // External acceleration per particle (e.g. from the SPH wind), added in eq. 1; empty = none.
+  std::vector<Vec3>& externalAcceleration() { return externalAcceleration_; }
+
+  // --- interaction (§5.1) ---
+  // Pulls a particle toward `target` through a soft constraint of the given strength (0–1).
+  void setDrag(uint32_t particle, const Vec3& target, float strength);
+  void clearDrag();
+  // Cuts the connection above `particle`: it and everything beyond it fall and disappear.
+  void cut(uint32_t particle);
+  // A new lateral apex on a grown branch particle, growing along `direction`.
+  uint32_t seedBranch(uint32_t particle, const Vec3& direction);
+  // Removes detached pieces that have come to rest (also done automatically, see settings).
+  void removeRestingPieces();
+
+  // --- queries ---
+  size_t capacity() const { return flags_.size(); }
+  size_t particleCount() const { return active_; }
+  size_t particleCount(uint32_t plant) const;
+  bool active(uint32_t i) const { return flags_[i] & kActive; }
+  uint32_t flags(uint32_t i) const { return flags_[i]; }
+  uint32_t plantOf(uint32_t i) const { return plant_[i]; }
+  uint32_t parent(uint32_t i) const { return parent_[i]; }
+  const Vec3& position(uint32_t i) const { return x_[i]; }
+  const Quat& orientation(uint32_t i) const { return q_[i]; }
+  const Vec3& velocity(uint32_t i) const { return v_[i]; }
+  const Vec3& restPosition(uint32_t i) const { return xr_[i]; }
+  float halfLength(uint32_t i) const { return a_[i]; }
+  float radius(uint32_t i) const { return b_[i]; }
+  float mass(uint32_t i) const { return m_[i]; }
+  float age(uint32_t i) const { return age_[i]; }
+  // Strain of the connection to the parent: |d − d̄| / d̄ (0 for roots).
+  float strain(uint32_t i) const;
+  // The particle's tip ("head"): where its successor attaches.
+  Vec3 head(uint32_t i) const { return x_[i] + q_[i] * Vec3(0, a_[i], 0); }
+  const std::vector<AttachedLeaf>& attachedLeaves() const { return leaves_; }
+  double kineticEnergy() const;  // J, translational + rotational, over all active particles
+
+  // The plant as a PlantModel; detached pieces that belong to it come out as extra roots with
+  // kNodeBroken.
+  plant::PlantModel snapshot(uint32_t plant) const;
+
+ private:
+  struct Plant {
+    std::string name;
+    ParticleSpecies species;
+    uint64_t seed = 1;
+    uint32_t root = kNone;
+    size_t particles = 0;
+    bool capped = false;
+  };
+
+  uint32_t allocate();
+  void release(uint32_t i);
+  void link(uint32_t parent, uint32_t child);
+  void unlink(uint32_t child);
+  void updateMass(uint32_t i);
+  float stiffnessOf(uint32_t i) const;
+  // Orientations by value: callers pass elements of arrays that allocate() may reallocate.
+  uint32_t spawn(uint32_t plant, uint32_t parent, Quat orientation, Quat restOrientation,
+                 float radius, uint32_t flags);
+  void markDetached(uint32_t root);
+
+  // phases (dynamics.cpp, growth.cpp, collisions.cpp)
+  void grow(const env::Environment& env);
+  void predict();
+  void shapeMatch();
+  void applyAnchors(const env::Environment& env);
+  void collideObstacles(const env::Environment& env);
+  void collideParticles();
+  void integrate();
+  void breakConnections();
+  void updateRestingPieces();
+  void buildOcclusion(const env::Environment& env);
+  float occlusion(const Vec3& p, const Vec3& towardLight) const;
+  // Stems of other branches within `radius` of particle i: their count and the sum of unit
+  // vectors from them to i (from the last collision pass's spatial hash).
+  Vec3 crowdAway(uint32_t i, float radius, int* count) const;
+
+  WorldSettings settings_;
+  std::vector<Plant> plants_;
+  float time_ = 0.0f;
+  uint32_t step_ = 0;
+  size_t active_ = 0;
+  StepTimings timings_;
+
+  // Hot state, one slot per particle (structure of arrays).
+  std::vector<Vec3> x_, xp_, v_, w_, xr_;
+  std::vector<Quat> q_, qp_, qr_, groupRotation_;
+  std::vector<float> a_, b_, m_, age_;
+  std::vector<uint32_t> flags_, plant_, parent_, firstChild_, nextSibling_;
+  // Cold(er) per-particle state.
+  std::vector<float> targetHalfLength_, restTime_;
+  std::vector<Vec3> anchor_;
+  std::vector<float> anchorPhi_;
+  std::vector<uint32_t> branchIndex_;  // position along its branch (leaf step, phyllotaxis)
+  std::vector<uint16_t> order_;        // branch order
+  std::vector<uint16_t> leafShape_;
+  std::vector<float> leafTarget_;      // leaf particles: full-grown blade length
+  std::vector<uint32_t> freeList_;
+  std::vector<Vec3> externalAcceleration_;
+  std::vector<AttachedLeaf> leaves_;
+
+  // Scratch for the parallel passes.
+  std::vector<Vec3> groupCenter_, groupRestCenter_, goal_, correction_;
+  std::vector<Quat> goalRotation_;
+  std::vector<Mat3> ellipsoidMoment_;
+  std::vector<uint32_t> hashParticles_, hashBucket_, hashStart_, hashEntries_;
+  float hashInv_ = 0.0f;  // 1 / cell size of the spatial hash
+
+  // Interaction.
+  uint32_t dragParticle_ = kNone;
+  Vec3 dragTarget_ = Vec3::Zero();
+  float dragStrength_ = 0.0f;
+
+  // Plant occlusion grid for phototropism (Fig. 11): leaf and branch area per cell.
+  struct Occlusion {
+    Vec3 origin = Vec3::Zero();
+    float cell = 0.1f;
+    Eigen::Vector3i dims = Eigen::Vector3i::Zero();
+    std::vector<float> density;
+  } occlusion_;
+};
+
+}  // namespace tendril::particles
