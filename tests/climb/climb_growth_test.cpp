@@ -11,7 +11,6 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <fstream>
 
 namespace tendril {
 namespace {
@@ -70,26 +69,9 @@ TEST(ClimbGrowth, BoxAndSphere) {
   EXPECT_GT(plant::computeStats(plants[1]).bounds.max.y(), 1.0f);  // over the ball
 }
 
-// A torus (genus one, concave around its hole) lying on the ground, read from an OBJ file.
-void writeTorusObj(const std::filesystem::path& path, float major, float minor, int nu, int nv) {
-  std::ofstream out(path);
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      float u = kTwoPi * i / nu, v = kTwoPi * j / nv;
-      float r = major + minor * std::cos(v);
-      out << "v " << r * std::cos(u) << " " << minor * std::sin(v) << " " << r * std::sin(u) << "\n";
-    }
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      int a = i * nv + j + 1, b = ((i + 1) % nu) * nv + j + 1, c = ((i + 1) % nu) * nv + (j + 1) % nv + 1,
-          d = i * nv + (j + 1) % nv + 1;
-      out << "f " << a << " " << d << " " << c << " " << b << "\n";
-    }
-}
-
 TEST(ClimbGrowth, ConcaveMeshFromFile) {
   auto dir = test::scratchDir();
-  writeTorusObj(dir / "torus.obj", 0.8f, 0.35f, 64, 32);
+  test::writeTorusObj(dir / "torus.obj", 0.8f, 0.35f, 64, 32);
   auto s = grow(std::string(R"({"tendril": 1, "seed": 9, "environment": {"obstacles": [)") + kGround +
                     R"(, {"name": "torus", "type": "mesh", "path": "torus.obj", "position": [0, 0.35, 0]}],
                      "lights": [)" + kSun + R"(]},

@@ -25,8 +25,9 @@ std::string ivy(const std::string& name, const std::string& position, int seed, 
          R"(, "seed": )" + std::to_string(seed) + extra + "}";
 }
 
-std::unique_ptr<session::Session> grow(const std::string& sceneJson, int steps) {
-  scene::Scene s = scene::parseScene(parseJson(sceneJson, "test scene"), "test scene", tendril::test::sourceDir());
+std::unique_ptr<session::Session> grow(const std::string& sceneJson, int steps,
+                                       const std::filesystem::path& baseDir = tendril::test::sourceDir()) {
+  scene::Scene s = scene::parseScene(parseJson(sceneJson, "test scene"), "test scene", baseDir);
   auto session = std::make_unique<session::Session>(std::move(s));
   session->run(uint32_t(steps));
   return session;
@@ -81,6 +82,47 @@ TEST(LSystemIvy, BoxSphereAndAWindow) {
     expectClean(*s);
     auto plants = s->plants();
     EXPECT_GT(plant::computeStats(plants[0]).bounds.max.y(), 1.0f);  // up the box
+  }
+}
+
+TEST(LSystemIvy, AConcaveMeshFromAFile) {
+  // The climbing model's torus: one ivy seeded in its hole, one outside leaning toward it.
+  auto dir = tendril::test::scratchDir();
+  tendril::test::writeTorusObj(dir / "torus.obj", 0.8f, 0.35f, 64, 32);
+  for (int seed = 1; seed <= 2; ++seed) {
+    SCOPED_TRACE(seed);
+    auto s = grow(std::string(R"({"tendril": 1, "seed": 9, "environment": {"obstacles": [)") + kGround +
+                      R"(, {"name": "torus", "type": "mesh", "path": "torus.obj", "position": [0, 0.35, 0]}],
+                       "lights": [)" + kSun + R"(]}, "plants": [)" + ivy("in-hole", "[0.6, 0, 0]", seed) + ", " +
+                      ivy("outside", "[0, 0, 1.0]", seed, R"(, "direction": [0, 1, -0.2])") + "]}",
+                  220, dir);
+    EXPECT_TRUE(s->environment().obstacle(1).closed);
+    expectClean(*s);
+  }
+}
+
+TEST(LSystemIvy, WrapsOverAThinWallAndGrowsDownItsBack) {
+  // As for the climbing model: a wall 4 cm thick (thinner than the adhesion distance), 80 cm
+  // high, sun in front. The ivy climbs the front, follows the top edge and hangs down the back
+  // — never through the wall.
+  for (int seed = 1; seed <= 3; ++seed) {
+    SCOPED_TRACE(seed);
+    auto s = grow(std::string(R"({"tendril": 1, "seed": 4, "environment": {"obstacles": [)") + kGround +
+                      R"(, {"name": "wall", "type": "wall", "size": [2.5, 0.8, 0.04]}],
+                       "lights": [{"type": "directional", "direction": [0, -1, -0.6]}]}, "plants": [)" +
+                      ivy("ivy", "[0, 0, 0.06]", seed) + "]}",
+                  240);
+    expectClean(*s);
+    plant::PlantModel p = s->plants()[0];
+    size_t onTop = 0;
+    float lowestBehind = 10.0f;
+    for (size_t i = 0; i < p.nodeCount(); ++i) {
+      Vec3 t = p.tip(i);
+      onTop += t.y() > 0.8f && std::abs(t.z()) < 0.03f && std::abs(t.x()) < 1.2f;
+      if (t.z() < -0.02f && std::abs(t.x()) < 1.0f) lowestBehind = std::min(lowestBehind, t.y());
+    }
+    EXPECT_GT(onTop, 50u) << "segments along the top edge";
+    EXPECT_LT(lowestBehind, 0.6f) << "at least 20 cm down the back";
   }
 }
 

@@ -1,6 +1,7 @@
 #include "support/climb_checks.h"
 
 #include <cmath>
+#include <fstream>
 
 namespace tendril::test {
 
@@ -48,6 +49,22 @@ ClimbReport checkClimbingPlant(const plant::PlantModel& p, const env::Environmen
       if (leafNormal.dot(support->away) < 0.0f) ++r.leavesFacingSurface;
   }
   return r;
+}
+
+void writeTorusObj(const std::filesystem::path& path, float major, float minor, int nu, int nv) {
+  std::ofstream out(path);
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      float u = kTwoPi * i / nu, v = kTwoPi * j / nv;
+      float r = major + minor * std::cos(v);
+      out << "v " << r * std::cos(u) << " " << minor * std::sin(v) << " " << r * std::sin(u) << "\n";
+    }
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      int a = i * nv + j + 1, b = ((i + 1) % nu) * nv + j + 1, c = ((i + 1) % nu) * nv + (j + 1) % nv + 1,
+          d = i * nv + (j + 1) % nv + 1;
+      out << "f " << a << " " << d << " " << c << " " << b << "\n";
+    }
 }
 
 }  // namespace tendril::test

@@ -5,6 +5,7 @@
 #include "tendril/env/environment.h"
 #include "tendril/plant/plant_model.h"
 
+#include <filesystem>
 #include <string>
 
 namespace tendril::test {
@@ -25,5 +26,9 @@ struct ClimbReport {
 void leafCorners(const plant::PlantModel& p, size_t leaf, Vec3 out[4]);
 
 ClimbReport checkClimbingPlant(const plant::PlantModel& p, const env::Environment& env, float adhesionDistance);
+
+// A torus (genus one, concave around its hole) lying in the XZ plane about the origin, written
+// as an OBJ file: a support shape read from a file.
+void writeTorusObj(const std::filesystem::path& path, float major, float minor, int nu, int nv);
 
 }  // namespace tendril::test
