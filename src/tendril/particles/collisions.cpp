@@ -53,6 +53,19 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
   // out along the surface normal. The push is kept for the velocity response in integrate().
   parallelFor(0, capacity(), [&](size_t i) {
     if (!(flags_[i] & kActive) || (flags_[i] & kRoot)) return;
+    // Fast particles (a fall, a hard drag) could pass through a thin obstacle between two
+    // steps, where no distance sample sees it: their path is cast as a ray first.
+    const Vec3 move = xp_[i] - x_[i];
+    const float moved = move.norm();
+    if (moved > b_[i] && std::isfinite(moved)) {
+      if (auto hit = env.rayCast(x_[i], move / moved, moved + b_[i])) {
+        Vec3 n = hit->normal;
+        if (n.dot(move) > 0.0f) n = -n;
+        const Vec3 stop = hit->point + n * b_[i];
+        correction_[i] = stop - xp_[i];
+        xp_[i] = stop;
+      }
+    }
     const Vec3 axis = qp_[i] * Vec3(0, a_[i], 0);
     const Vec3 samples[3] = {xp_[i], xp_[i] + axis, xp_[i] - axis};
     Vec3 push = Vec3::Zero();
@@ -64,7 +77,7 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
     }
     if (push.squaredNorm() > 0.0f) {
       xp_[i] += push;
-      correction_[i] = push;
+      correction_[i] += push;
     }
   }, 256);
 }

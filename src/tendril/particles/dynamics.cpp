@@ -23,11 +23,11 @@ Quat extractRotation(const Mat3& A, Quat q, int maxIterations) {
 
 namespace {
 
-// Relative influence of the groups a particle belongs to (eq. 4): parents weigh more than the
-// particle itself, which weighs more than its children, so particles follow their parents.
+// Relative influence of the groups a particle belongs to (eq. 4): its parent's group weighs
+// more than its own, so particles follow their parents.
 constexpr float kParentGroupWeight = 4.0f;
 constexpr float kOwnGroupWeight = 2.0f;
-constexpr float kChildGroupWeight = 1.0f;
+constexpr float kRootMassScale = 1000.0f;  // see shapeMatch()
 
 }  // namespace
 
@@ -66,8 +66,8 @@ void ParticleWorld::applyAnchors(const env::Environment& env) {
       return;
     }
     // The attachment strengthens as the particle grows (φ linear in particle size).
+    // The pull itself is applied within shape matching, after each particle's goal.
     anchorPhi_[i] = s.anchorStrength * std::clamp(a_[i] / std::max(targetHalfLength_[i], 1e-6f), 0.0f, 1.0f);
-    xp_[i] += anchorPhi_[i] * (anchor_[i] - xp_[i]);
   }, 512);
 }
 
@@ -75,92 +75,122 @@ void ParticleWorld::shapeMatch() {
   const size_t n = capacity();
   groupCenter_.resize(n);
   groupRestCenter_.resize(n);
-  goal_.resize(n);
-  goalRotation_.resize(n);
-  ellipsoidMoment_.resize(n);
 
+  // Every connected piece (a plant, or a piece broken off it) is matched on its own, from its
+  // root outward (Gauss–Seidel): a group is fitted once its parent has reached its goal, so the
+  // root's hold reaches the tips within one pass instead of creeping outward over many steps.
+  // Pieces never share particles, so they run in parallel with results independent of the
+  // thread count.
+  pieceStart_.clear();
+  pieceOrder_.clear();
+  for (uint32_t r = 0; r < n; ++r) {
+    if (!(flags_[r] & kActive) || parent_[r] != kNone) continue;
+    pieceStart_.push_back(uint32_t(pieceOrder_.size()));
+    pieceOrder_.push_back(r);
+    for (size_t k = pieceOrder_.size() - 1; k < pieceOrder_.size(); ++k)
+      for (uint32_t c = firstChild_[pieceOrder_[k]]; c != kNone; c = nextSibling_[c]) pieceOrder_.push_back(c);
+  }
+  pieceStart_.push_back(uint32_t(pieceOrder_.size()));
+
+  // A plant's root is held in place and orientation. In its groups it counts as much heavier,
+  // so that it fixes their rotation as well as their position — otherwise a two-particle group
+  // could turn freely about its centre and the plant would topple.
+  auto matchMass = [&](uint32_t i) { return (flags_[i] & kRoot) ? kRootMassScale * m_[i] : m_[i]; };
   auto member = [&](uint32_t i, auto&& visit) {
     // A group: the particle, its parent and its children (all currently connected).
     visit(i);
     if (parent_[i] != kNone) visit(parent_[i]);
     for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) visit(c);
   };
-
-  for (int iteration = 0; iteration < std::max(1, settings_.iterations); ++iteration) {
-    // Pass 0: every particle's own moment, shared by the (up to 2 + children) groups it is in.
-    // Eq. 15: A_i = m/5 · R_i diag(b², a², b²) R̄_iᵀ (the garbled extraction reads
-    // "1/5 m diag(a², b², c²) R"; with both a current and a rest orientation the moment is this
-    // product — Müller & Chentanez 2011, eq. 9).
-    parallelFor(0, n, [&](size_t i) {
-      if (!(flags_[i] & kActive)) return;
+  // Eq. 14–15 for the group of g: its optimal rotation (robust extraction) and its centres.
+  auto fitGroup = [&](uint32_t g) {
+    float mass = 0.0f;
+    Vec3 c = Vec3::Zero(), cr = Vec3::Zero();
+    member(g, [&](uint32_t i) {
+      const float m = matchMass(i);
+      mass += m;
+      c += m * xp_[i];
+      cr += m * xr_[i];
+    });
+    c /= mass;
+    cr /= mass;
+    Mat3 A = Mat3::Zero();
+    member(g, [&](uint32_t i) {
+      // Eq. 15, the ellipsoid's own moment: A_i = m/5 · R_i diag(b², a², b²) R̄_iᵀ (the garbled
+      // extraction reads "1/5 m diag(a², b², c²) R"; with both a current and a rest orientation
+      // the moment is this product — Müller & Chentanez 2011, eq. 9), written as
+      // bb R R̄ᵀ + (aa − bb) r_y r̄_yᵀ.
+      const float m = matchMass(i);
       const Mat3 R = qp_[i].toRotationMatrix();
       const Mat3 Rr = qr_[i].toRotationMatrix();
-      const float k = m_[i] / 5.0f, bb = k * b_[i] * b_[i], aa = k * a_[i] * a_[i];
-      // R diag(bb, aa, bb) R̄ᵀ = bb R R̄ᵀ + (aa − bb) r_y r̄_yᵀ.
-      ellipsoidMoment_[i] = bb * (R * Rr.transpose()) + (aa - bb) * R.col(1) * Rr.col(1).transpose();
-    }, 1024);
+      const float k = m / 5.0f, bb = k * b_[i] * b_[i], aa = k * a_[i] * a_[i];
+      A += bb * (R * Rr.transpose()) + (aa - bb) * R.col(1) * Rr.col(1).transpose();
+      // Eq. 14's point terms, centred on the group.
+      A += m * (xp_[i] - c) * (xr_[i] - cr).transpose();
+    });
+    // Warm-started from the last step, a few iterations of the extraction track the rotation.
+    groupRotation_[g] = extractRotation(A, groupRotation_[g], 3);
+    groupCenter_[g] = c;
+    groupRestCenter_[g] = cr;
+  };
 
-    // Pass 1: every group's optimal rotation (eq. 14–15 with the robust extraction).
-    parallelFor(0, n, [&](size_t gi) {
-      const uint32_t g = uint32_t(gi);
-      if (!(flags_[g] & kActive)) return;
-      float mass = 0.0f;
-      Vec3 c = Vec3::Zero(), cr = Vec3::Zero();
-      member(g, [&](uint32_t i) {
-        mass += m_[i];
-        c += m_[i] * xp_[i];
-        cr += m_[i] * xr_[i];
-      });
-      c /= mass;
-      cr /= mass;
-      Mat3 A = Mat3::Zero();
-      member(g, [&](uint32_t i) {
-        // Eq. 14's point terms, centred on the group, plus the ellipsoid moments.
-        A += ellipsoidMoment_[i] + m_[i] * (xp_[i] - c) * (xr_[i] - cr).transpose();
-      });
-      // Warm-started from the last step, two iterations of the extraction track the rotation.
-      groupRotation_[g] = extractRotation(A, groupRotation_[g], 2);
-      groupCenter_[g] = c;
-      groupRestCenter_[g] = cr;
-    }, 512);
-
-    // Pass 2: goals as the weighted sum of the targets every group gives a particle (eq. 3–4),
-    // moved toward from the prediction by the particle's stiffness (§4.3).
-    parallelFor(0, n, [&](size_t ii) {
-      const uint32_t i = uint32_t(ii);
-      if (!(flags_[i] & kActive)) return;
-      if (flags_[i] & kRoot) {
-        goal_[i] = xr_[i];
-        goalRotation_[i] = qr_[i];
-        return;
+  const int iterations = std::max(1, settings_.iterations);
+  parallelFor(0, pieceStart_.size() - 1, [&](size_t piece) {
+    for (int iteration = 0; iteration < iterations; ++iteration) {
+      for (uint32_t k = pieceStart_[piece]; k < pieceStart_[piece + 1]; ++k) {
+        const uint32_t i = pieceOrder_[k];
+        fitGroup(i);
+        if (flags_[i] & kRoot) {
+          xp_[i] = xr_[i];
+          qp_[i] = qr_[i];
+          continue;
+        }
+        // Eq. 3–4: the goal is the weighted sum of the targets of the groups the particle is
+        // in — its parent's (fitted after the parent moved) weighing more than its own.
+        Vec3 sum = Vec3::Zero();
+        float weight = 0.0f;
+        auto target = [&](uint32_t g, float role) {
+          const float w = role * m_[g];
+          sum += w * (groupRotation_[g] * (xr_[i] - groupRestCenter_[g]) + groupCenter_[g]);  // eq. 3
+          weight += w;
+        };
+        target(i, kOwnGroupWeight);
+        if (const uint32_t p = parent_[i]; p != kNone) {
+          // The parent has already reached its goal: its group's target for this particle is
+          // taken in the parent's own frame (an oriented particle carries its rotation,
+          // R_p = q_p q̄_p⁻¹), which holds a chain straight where a three-point fit could bend.
+          const float w = kParentGroupWeight * m_[p];
+          const Quat Rp = qp_[p] * qr_[p].conjugate();
+          sum += w * (Rp * (xr_[i] - xr_[p]) + xp_[p]);
+          weight += w;
+        }
+        const Vec3 xg = sum / weight;  // eq. 4
+        const float s = stiffnessOf(i);
+        Vec3 x = xp_[i] + s * (xg - xp_[i]);  // x'_g = x_p + s (x_g − x_p), §4.3
+        // Orientation: the own group's rotation applied to the rest orientation (MC11), blended
+        // by the same stiffness (normalised lerp: the two are close within one step).
+        // With a parent, its rotation joins in with the same weights as for the position.
+        Quat rotation = groupRotation_[i];
+        if (const uint32_t p = parent_[i]; p != kNone) {
+          Quat Rp = qp_[p] * qr_[p].conjugate();
+          if (Rp.coeffs().dot(rotation.coeffs()) < 0.0f) Rp.coeffs() = -Rp.coeffs();
+          const float wp = kParentGroupWeight * m_[p], wo = kOwnGroupWeight * m_[i];
+          rotation.coeffs() = wo * rotation.coeffs() + wp * Rp.coeffs();
+          rotation.normalize();
+        }
+        Quat qg = rotation * qr_[i];
+        if (qg.coeffs().dot(qp_[i].coeffs()) < 0.0f) qg.coeffs() = -qg.coeffs();
+        Quat q;
+        q.coeffs() = (1.0f - s) * qp_[i].coeffs() + s * qg.coeffs();
+        q.normalize();
+        if (i == dragParticle_) x += dragStrength_ * (dragTarget_ - x);
+        // Eq. 5 after the shape: x'_p = x_p + φ (x_anchor − x_p) (see applyAnchors()).
+        if (flags_[i] & kAnchored) x += anchorPhi_[i] * (anchor_[i] - x);
+        xp_[i] = x;
+        qp_[i] = q;
       }
-      Vec3 sum = Vec3::Zero();
-      float weight = 0.0f;
-      auto target = [&](uint32_t g, float role) {
-        const float w = role * m_[g];
-        sum += w * (groupRotation_[g] * (xr_[i] - groupRestCenter_[g]) + groupCenter_[g]);  // eq. 3
-        weight += w;
-      };
-      target(i, kOwnGroupWeight);
-      if (parent_[i] != kNone) target(parent_[i], kParentGroupWeight);
-      for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) target(c, kChildGroupWeight);
-      const Vec3 xg = sum / weight;  // eq. 4
-      const float s = stiffnessOf(i);
-      Vec3 x = xp_[i] + s * (xg - xp_[i]);  // x'_g = x_p + s (x_g − x_p)
-      // Orientation: the own group's rotation applied to the rest orientation (MC11), blended
-      // by the same stiffness (normalised lerp: the two are close within one step).
-      Quat qg = groupRotation_[i] * qr_[i];
-      if (qg.coeffs().dot(qp_[i].coeffs()) < 0.0f) qg.coeffs() = -qg.coeffs();
-      Quat q;
-      q.coeffs() = (1.0f - s) * qp_[i].coeffs() + s * qg.coeffs();
-      q.normalize();
-      if (i == dragParticle_) x += dragStrength_ * (dragTarget_ - x);
-      goal_[i] = x;
-      goalRotation_[i] = q;
-    }, 512);
-    std::swap(xp_, goal_);
-    std::swap(qp_, goalRotation_);
-  }
+    }
+  }, 1);
 }
 
 void ParticleWorld::integrate() {
@@ -206,7 +236,9 @@ void ParticleWorld::breakConnections() {
   // and the piece falls. t_s = 0 never breaks.
   std::vector<uint32_t> broken;
   for (uint32_t i = 0; i < capacity(); ++i) {
-    if (!(flags_[i] & kActive) || parent_[i] == kNone) continue;
+    // Growing apices are not judged: a particle a few millimetres long shows large relative
+    // strain from tiny displacements.
+    if (!(flags_[i] & kActive) || parent_[i] == kNone || (flags_[i] & kApex)) continue;
     const ParticleSpecies& s = plants_[plant_[i]].species;
     if (s.breakThreshold <= 0.0f) continue;
     if (strain(i) > (1.0f - s.breakThreshold) * s.maxStrain) broken.push_back(i);

@@ -49,7 +49,7 @@ enum ParticleFlags : uint32_t {
 struct WorldSettings {
   float dt = 0.025f;                  // physics step (s), as in seed 000 §6
   Vec3 gravity = Vec3(0, -9.81f, 0);  // m/s²
-  int iterations = 2;                 // shape-matching passes per step
+  int iterations = 3;                 // shape-matching passes per step
   bool plantCollisions = true;        // plant–plant and self collisions
   float restingSpeed = 0.05f;         // a fallen piece slower than this (m/s)...
   float restingTime = 1.0f;           // ...for this long (s) is at rest
@@ -197,7 +197,7 @@ class ParticleWorld {
   // Scratch for the parallel passes.
   std::vector<Vec3> groupCenter_, groupRestCenter_, goal_, correction_;
   std::vector<Quat> goalRotation_;
-  std::vector<Mat3> ellipsoidMoment_;
+  std::vector<uint32_t> pieceStart_, pieceOrder_;  // connected pieces, each root first (BFS)
   std::vector<uint32_t> hashParticles_, hashBucket_, hashStart_, hashEntries_;
   float hashInv_ = 0.0f;  // 1 / cell size of the spatial hash
 
