@@ -122,6 +122,20 @@ class Turtle {
     }
   }
 
+  // Room for the segments and leaves the string draws itself (interpretation rules may add
+  // more), so that the plant's arrays grow once instead of doubling their way up.
+  void reserveFor(const LString& s) {
+    std::vector<uint8_t> kind(g_.modules.size(), 0);
+    for (size_t id = 0; id < g_.modules.size(); ++id)
+      kind[id] = g_.modules[id].op == TurtleOp::Forward ? 1 : g_.modules[id].op == TurtleOp::Leaf ? 2 : 0;
+    size_t nodes = 0, leaves = 0;
+    for (ModuleId id : s.ids) {
+      nodes += kind[id] == 1;
+      leaves += kind[id] == 2;
+    }
+    plant_.reserve(nodes, leaves);
+  }
+
   plant::PlantModel takePlant() {
     for (auto& [c, mesh] : colorMeshes_) {
       plant::PrimitiveMesh pm;
@@ -681,6 +695,7 @@ void answer(const EnvRequest& r, float* p, uint32_t n, const env::Environment* e
 plant::PlantModel interpret(const Grammar& g, const LString& s, const InterpretOptions& options,
                             const double* globals) {
   Turtle t(g, options, globals, Mode::Build);
+  t.reserveFor(s);
   t.walk(s, nullptr);
   return t.takePlant();
 }
