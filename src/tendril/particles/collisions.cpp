@@ -69,9 +69,11 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
     const Vec3 axis = qp_[i] * Vec3(0, a_[i], 0);
     const Vec3 samples[3] = {xp_[i], xp_[i] + axis, xp_[i] - axis};
     Vec3 push = Vec3::Zero();
-    for (const Vec3& p : samples) {
+    for (int k = 0; k < 3; ++k) {
       Vec3 g;
-      float d = env.signedDistance(p + push, &g);
+      const float d = env.signedDistance(samples[k] + push, &g);
+      // A centre farther than the half-length plus the radius: the ends are clear as well.
+      if (k == 0 && d > a_[i] + b_[i]) break;
       const float depth = b_[i] - d;
       if (depth > 0.0f && g.squaredNorm() > 0.0f) push += g * depth;
     }

@@ -116,23 +116,30 @@ void ParticleWorld::shapeMatch() {
     cr /= mass;
     Mat3 A = Mat3::Zero();
     member(g, [&](uint32_t i) {
-      // Eq. 15, the ellipsoid's own moment: A_i = m/5 · R_i diag(b², a², b²) R̄_iᵀ (the garbled
-      // extraction reads "1/5 m diag(a², b², c²) R"; with both a current and a rest orientation
-      // the moment is this product — Müller & Chentanez 2011, eq. 9), written as
-      // bb R R̄ᵀ + (aa − bb) r_y r̄_yᵀ.
-      const float m = matchMass(i);
-      const Mat3 R = qp_[i].toRotationMatrix();
-      const Mat3 Rr = qr_[i].toRotationMatrix();
-      const float k = m / 5.0f, bb = k * b_[i] * b_[i], aa = k * a_[i] * a_[i];
-      A += bb * (R * Rr.transpose()) + (aa - bb) * R.col(1) * Rr.col(1).transpose();
-      // Eq. 14's point terms, centred on the group.
-      A += m * (xp_[i] - c) * (xr_[i] - cr).transpose();
+      // Eq. 14's point terms, centred on the group, plus the ellipsoids' own moments.
+      A += ellipsoidMoment_[i] + matchMass(i) * (xp_[i] - c) * (xr_[i] - cr).transpose();
     });
-    // Warm-started from the last step, a few iterations of the extraction track the rotation.
-    groupRotation_[g] = extractRotation(A, groupRotation_[g], 3);
+    // Warm-started from the last fit, one iteration of the extraction per pass tracks the
+    // rotation (each step makes `iterations` passes).
+    groupRotation_[g] = extractRotation(A, groupRotation_[g], 1);
     groupCenter_[g] = c;
     groupRestCenter_[g] = cr;
   };
+
+  // Eq. 15, the ellipsoid's own moment: A_i = m/5 · R_i diag(b², a², b²) R̄_iᵀ (the garbled
+  // extraction reads "1/5 m diag(a², b², c²) R"; with both a current and a rest orientation the
+  // moment is this product — Müller & Chentanez 2011, eq. 9), written as
+  // bb R R̄ᵀ + (aa − bb) r_y r̄_yᵀ. Kept per particle and renewed whenever it turns.
+  ellipsoidMoment_.resize(n);
+  auto updateMoment = [&](uint32_t i) {
+    const Mat3 R = qp_[i].toRotationMatrix();
+    const Mat3 Rr = qr_[i].toRotationMatrix();
+    const float k = matchMass(i) / 5.0f, bb = k * b_[i] * b_[i], aa = k * a_[i] * a_[i];
+    ellipsoidMoment_[i] = bb * (R * Rr.transpose()) + (aa - bb) * R.col(1) * Rr.col(1).transpose();
+  };
+  parallelFor(0, n, [&](size_t i) {
+    if (flags_[i] & kActive) updateMoment(uint32_t(i));
+  }, 2048);
 
   const int iterations = std::max(1, settings_.iterations);
   parallelFor(0, pieceStart_.size() - 1, [&](size_t piece) {
@@ -188,6 +195,7 @@ void ParticleWorld::shapeMatch() {
         if (flags_[i] & kAnchored) x += anchorPhi_[i] * (anchor_[i] - x);
         xp_[i] = x;
         qp_[i] = q;
+        updateMoment(i);
       }
     }
   }, 1);

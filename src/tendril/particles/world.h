@@ -197,6 +197,7 @@ class ParticleWorld {
   // Scratch for the parallel passes.
   std::vector<Vec3> groupCenter_, groupRestCenter_, goal_, correction_;
   std::vector<Quat> goalRotation_;
+  std::vector<Mat3> ellipsoidMoment_;
   std::vector<uint32_t> pieceStart_, pieceOrder_;  // connected pieces, each root first (BFS)
   std::vector<uint32_t> hashParticles_, hashBucket_, hashStart_, hashEntries_;
   float hashInv_ = 0.0f;  // 1 / cell size of the spatial hash
