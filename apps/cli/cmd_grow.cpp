@@ -25,6 +25,7 @@ struct GrowOptions {
   std::string outDir;
   int64_t steps = -1;
   int64_t seed = -1;
+  int64_t every = 0;
   std::string formats = "glb,obj";
   CommonOptions common;
 };
@@ -65,42 +66,55 @@ int runGrow(const GrowOptions& o) {
   Timer total;
   session::Session session(std::move(scene));
   const scene::Scene& sc = session.scene();
-  {
-    Progress progress("growing", uint64_t(sc.steps), !o.common.quiet);
-    session.run(uint32_t(sc.steps), [&](uint32_t done) {
-      progress.update(done, fmt::format("{} segments", session.segmentCount()));
-    });
-    progress.finish(fmt::format("{} segments", session.segmentCount()));
-  }
-  double growSeconds = total.seconds();
-
-  io::ExportScene exportScene;
-  exportScene.plants = session.plants();
-  for (const plant::PlantModel& p : exportScene.plants) plant::validate(p, o.scene);
-  if (sc.output.includeObstacles) {
-    const env::Environment& env = session.environment();
-    for (uint32_t id = 0; id < env.obstacleCount(); ++id) {
-      const env::ObstacleInfo& info = env.obstacle(id);
-      io::NamedMesh m{info.name, env.obstacleMesh(id), info.color};
-      for (Vec3& v : m.mesh.positions) v = info.worldFromLocal.applyPoint(v);
-      exportScene.meshes.push_back(std::move(m));
-    }
-  }
   io::ExportOptions options;
   options.mesh.radialSegments = sc.output.radialSegments;
   options.mesh.subdivisions = sc.output.subdivisions;
 
-  // Mesh once; both writers share the meshes, materials and textures.
-  io::ExportModel model = io::buildExportModel(exportScene, options);
+  // Meshes the plants (and obstacles, if asked) once for both writers; `stem` names the files.
   std::vector<std::string> written;
-  if (formats.count("glb")) {
-    io::writeGlb(model, outDir / "plant.glb");
-    written.push_back((outDir / "plant.glb").string());
+  io::ExportScene exportScene;
+  auto writeFiles = [&](const std::string& stem) {
+    exportScene = io::ExportScene{};
+    exportScene.plants = session.plants();
+    for (const plant::PlantModel& p : exportScene.plants) plant::validate(p, o.scene);
+    if (sc.output.includeObstacles) {
+      const env::Environment& env = session.environment();
+      for (uint32_t id = 0; id < env.obstacleCount(); ++id) {
+        const env::ObstacleInfo& info = env.obstacle(id);
+        io::NamedMesh m{info.name, env.obstacleMesh(id), info.color};
+        for (Vec3& v : m.mesh.positions) v = info.worldFromLocal.applyPoint(v);
+        exportScene.meshes.push_back(std::move(m));
+      }
+    }
+    io::ExportModel model = io::buildExportModel(exportScene, options);
+    if (formats.count("glb")) {
+      io::writeGlb(model, outDir / (stem + ".glb"));
+      written.push_back((outDir / (stem + ".glb")).string());
+    }
+    if (formats.count("obj")) {
+      io::writeObj(model, outDir / (stem + ".obj"));
+      written.push_back((outDir / (stem + ".obj")).string());
+    }
+  };
+
+  double exportSeconds = 0.0;
+  {
+    Progress progress("growing", uint64_t(sc.steps), !o.common.quiet);
+    session.run(uint32_t(sc.steps), [&](uint32_t done) {
+      progress.update(done, fmt::format("{} segments", session.segmentCount()));
+      // --every K: a numbered sequence, plant_000040.glb after step 40, ...
+      if (o.every > 0 && done % uint32_t(o.every) == 0) {
+        Timer t;
+        writeFiles(fmt::format("plant_{:06d}", done));
+        exportSeconds += t.seconds();
+      }
+    });
+    progress.finish(fmt::format("{} segments", session.segmentCount()));
   }
-  if (formats.count("obj")) {
-    io::writeObj(model, outDir / "plant.obj");
-    written.push_back((outDir / "plant.obj").string());
-  }
+  double growSeconds = total.seconds() - exportSeconds;
+  const size_t sequenceFiles = written.size();
+  written.clear();
+  writeFiles("plant");
 
   if (!o.common.quiet) {
     size_t segments = 0, leaves = 0;
@@ -113,6 +127,7 @@ int runGrow(const GrowOptions& o) {
     }
     std::string files;
     for (const auto& w : written) files += (files.empty() ? "" : ", ") + w;
+    if (sequenceFiles > 0) files += fmt::format(" and a sequence of {} file(s) in {}", sequenceFiles, outDir.string());
     log::info("grew {} plant(s) in {} steps: {} segments, {} leaves (growth {:.2f} s, total {:.2f} s); wrote {}",
               exportScene.plants.size(), session.stepCount(), segments, leaves, growSeconds, total.seconds(), files);
   }
@@ -127,6 +142,9 @@ RegisterCommand registerGrow("grow", "Grow every plant of a scene and write the 
       ->required();
   sub.add_option("--steps", o->steps, "Growth steps (overrides the scene's \"steps\")")->check(CLI::Range(0, 10000000));
   sub.add_option("--seed", o->seed, "Scene seed (overrides the scene's \"seed\")")->check(CLI::NonNegativeNumber);
+  sub.add_option("--every", o->every,
+                 "Also write the plants every K steps as a numbered sequence (plant_000040.glb, ...)")
+      ->check(CLI::Range(1, 10000000));
   sub.add_option("--format", o->formats, "Comma-separated output formats: glb, obj")->capture_default_str();
   addCommonOptions(sub, o->common);
   return [o] { return runGrow(*o); };

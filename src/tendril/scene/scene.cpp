@@ -153,6 +153,7 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
   if (version != kSceneFormatVersion)
     throw root.error("tendril", fmt::format("scene format version {} is not supported (this build reads {})",
                                             version, kSceneFormatVersion));
+  scene.description = root.string("description", "");
   scene.seed = root.seed("seed", 1);
   scene.steps = int(root.integer("steps", scene.steps, 0, 10000000));
   scene.stepTime = root.numberf("step_time", scene.stepTime, 1e-6, 1e9);

@@ -23,6 +23,7 @@ struct OutputSettings {
 };
 
 struct Scene {
+  std::string description;  // free text for people (optional)
   std::filesystem::path path;  // the file it came from ("" for built-in/in-memory scenes)
   std::string source;          // how errors name it: the path, or what parseScene was told
   uint64_t seed = 1;
