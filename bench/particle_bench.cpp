@@ -1,0 +1,101 @@
+// One simulation step of the oriented-particle plants (seed 000): growth + dynamics +
+// collisions + integration, no rendering, for 1k to 200k particles, with the per-phase
+// breakdown of the paper's Table 1. Results and the command: bench/README.md.
+#include "tendril/core/timer.h"
+#include "tendril/env/environment.h"
+#include "tendril/env/primitives.h"
+#include "tendril/particles/particle_model.h"
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace tendril {
+namespace {
+
+// Plants `plants` ivies 1.5 m apart along the foot of a 3 m high wall and grows them until the
+// world holds `particles` particles (each plant is capped at its share).
+struct Grown {
+  std::unique_ptr<env::Environment> env;
+  std::unique_ptr<particles::ParticleWorld> world;
+  double growSeconds = 0;
+};
+
+Grown& grown(size_t target, int plants) {
+  static std::map<std::pair<size_t, int>, Grown> cache;
+  Grown& g = cache[{target, plants}];
+  if (g.world) return g;
+  Timer t;
+  const float width = 1.5f * float(plants) + 1.0f;
+  g.env = std::make_unique<env::Environment>();
+  env::ObstacleDef ground;
+  ground.name = "ground";
+  ground.mesh = env::makePlane(Vec2(width + 4, 6), 0.2f);
+  g.env->addObstacle(ground);
+  env::ObstacleDef wall;
+  wall.name = "wall";
+  wall.mesh = env::makeBox(Vec3(width, 3.0f, 0.2f));
+  wall.worldFromLocal.translation = Vec3(0, 1.5f, 0);
+  g.env->addObstacle(wall);
+  env::Light sun;
+  sun.direction = Vec3(0, -0.6f, -1).normalized();
+  g.env->addLight(sun);
+  g.env->commit();
+
+  particles::ParticleSpecies s = particles::loadSpecies("ivy-particles", "");
+  s.maxParticles = int(target / size_t(plants)) + 4;
+  s.growthSpeed = 60.0f;  // reach the size sooner; the step's work depends on the count only
+  g.world = std::make_unique<particles::ParticleWorld>();
+  for (int k = 0; k < plants; ++k)
+    g.world->addPlant("ivy" + std::to_string(k), s, Vec3(1.5f * (k - 0.5f * (plants - 1)), 0.03f, 0.11f),
+                      Vec3(0, 1, 0), uint64_t(k + 1), *g.env);
+  for (int step = 0; step < 6000 && g.world->particleCount() < target * 97 / 100; ++step) g.world->step(*g.env);
+  // Let the last particles finish growing and the plants settle.
+  for (int step = 0; step < 100; ++step) g.world->step(*g.env);
+  g.growSeconds = t.seconds();
+  return g;
+}
+
+void BM_ParticleStep(benchmark::State& state) {
+  Grown& g = grown(size_t(state.range(0)), int(state.range(1)));
+  particles::ParticleWorld& w = *g.world;
+  std::vector<double> total, growth, dynamics, collisions, integrate;
+  for (auto _ : state) {
+    Timer t;
+    w.step(*g.env);
+    const double seconds = t.seconds();
+    state.SetIterationTime(seconds);
+    total.push_back(seconds);
+    growth.push_back(w.timings().growth);
+    dynamics.push_back(w.timings().dynamics);
+    collisions.push_back(w.timings().collisions);
+    integrate.push_back(w.timings().breaking);
+  }
+  auto medianMs = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2] * 1e3;
+  };
+  state.counters["particles"] = double(w.particleCount());
+  state.counters["median_ms"] = medianMs(total);
+  state.counters["growth_ms"] = medianMs(growth);
+  state.counters["dynamics_ms"] = medianMs(dynamics);
+  state.counters["collisions_ms"] = medianMs(collisions);
+  state.counters["integrate_ms"] = medianMs(integrate);
+  state.counters["setup_s"] = g.growSeconds;
+}
+BENCHMARK(BM_ParticleStep)
+    ->Args({1000, 1})
+    ->Args({5000, 4})
+    ->Args({25000, 20})
+    ->Args({100000, 40})
+    ->Args({200000, 80})
+    ->ArgNames({"particles", "plants"})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(50);
+
+}  // namespace
+}  // namespace tendril
