@@ -125,6 +125,18 @@ void ParticleWorld::collideParticles() {
     std::vector<uint32_t> fill(start.begin(), start.end() - 1);
     for (size_t k = 0; k < stems.size(); ++k) entries[fill[bucket[k]]++] = stems[k];
   }
+  // What the pair test reads first, packed in table order: cell, centre, reach.
+  struct Packed {
+    Eigen::Vector3i cell;
+    Vec3 x;
+    float reach;
+  };
+  static_assert(sizeof(Packed) == 28);
+  std::vector<Packed> packed(entries.size());
+  parallelFor(0, entries.size(), [&](size_t e) {
+    const uint32_t j = entries[e];
+    packed[e] = {cellOf(xp_[j]), xp_[j], a_[j] + b_[j]};
+  }, 4096);
 
   // Particles within two generations of each other meet at joints by construction.
   auto related = [&](uint32_t i, uint32_t j) {
@@ -145,34 +157,34 @@ void ParticleWorld::collideParticles() {
     const Vec3 axisI = qp_[i] * Vec3(0, a_[i], 0);
     const Vec3 ai = xp_[i] - axisI, bi = xp_[i] + axisI;
     const Eigen::Vector3i c = cellOf(xp_[i]);
-    // The 27 neighbouring cells' buckets, each visited once even where cells share a bucket.
-    uint32_t buckets[27];
-    int count = 0;
+    // The 27 neighbouring cells; a bucket may also hold other cells' particles (hash
+    // collisions), which the cell test skips, so no particle is seen twice.
+    Vec3 push = Vec3::Zero();
+    const float reachI = a_[i] + b_[i];
     for (int dz = -1; dz <= 1; ++dz)
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
-          const uint32_t h = spatialHash(c + Eigen::Vector3i(dx, dy, dz), mask);
-          if (std::find(buckets, buckets + count, h) == buckets + count) buckets[count++] = h;
+          const Eigen::Vector3i cell = c + Eigen::Vector3i(dx, dy, dz);
+          const uint32_t h = spatialHash(cell, mask);
+          for (uint32_t e = start[h]; e < start[h + 1]; ++e) {
+            const Packed& q = packed[e];
+            if (q.cell != cell) continue;
+            const float reach = reachI + q.reach;
+            if ((q.x - xp_[i]).squaredNorm() > reach * reach) continue;
+            const uint32_t j = entries[e];
+            if (j == i || related(i, j)) continue;
+            const Vec3 axisJ = qp_[j] * Vec3(0, a_[j], 0);
+            Vec3 ci, cj;
+            closestSegmentPoints(ai, bi, xp_[j] - axisJ, xp_[j] + axisJ, &ci, &cj);
+            const Vec3 d = ci - cj;
+            const float dist = d.norm(), minDist = b_[i] + b_[j];
+            if (dist >= minDist || dist < 1e-9f) continue;
+            // Displace along the contact normal, in proportion to the other's mass; each side
+            // moves half, as the other particle does the same from its side.
+            const float share = m_[j] / (m_[i] + m_[j]);
+            push += d / dist * (0.5f * (minDist - dist) * share);
+          }
         }
-    Vec3 push = Vec3::Zero();
-    const float reachI = a_[i] + b_[i];
-    for (int k = 0; k < count; ++k)
-      for (uint32_t e = start[buckets[k]]; e < start[buckets[k] + 1]; ++e) {
-        const uint32_t j = entries[e];
-        if (j == i) continue;
-        const float reach = reachI + a_[j] + b_[j];
-        if ((xp_[j] - xp_[i]).squaredNorm() > reach * reach || related(i, j)) continue;
-        const Vec3 axisJ = qp_[j] * Vec3(0, a_[j], 0);
-        Vec3 ci, cj;
-        closestSegmentPoints(ai, bi, xp_[j] - axisJ, xp_[j] + axisJ, &ci, &cj);
-        const Vec3 d = ci - cj;
-        const float dist = d.norm(), minDist = b_[i] + b_[j];
-        if (dist >= minDist || dist < 1e-9f) continue;
-        // Displace along the contact normal, in proportion to the other's mass; each side
-        // moves half, as the other particle does the same from its side.
-        const float share = m_[j] / (m_[i] + m_[j]);
-        push += d / dist * (0.5f * (minDist - dist) * share);
-      }
     // Never more than a radius per step: a deep tangle resolves over a few steps.
     const float len = push.norm();
     if (len > b_[i]) push *= b_[i] / len;

@@ -95,7 +95,14 @@ void ParticleWorld::shapeMatch() {
   // A plant's root is held in place and orientation. In its groups it counts as much heavier,
   // so that it fixes their rotation as well as their position — otherwise a two-particle group
   // could turn freely about its centre and the plant would topple.
-  auto matchMass = [&](uint32_t i) { return (flags_[i] & kRoot) ? kRootMassScale * m_[i] : m_[i]; };
+  // A leaf weighs more than the thin twig it hangs from, but it must not steer the twig's fit:
+  // in the groups it counts at most as heavy as its parent (a heavier leaf made the pair of
+  // fits feed each other until they oscillated). Gravity acts on it all the same.
+  auto matchMass = [&](uint32_t i) {
+    if (flags_[i] & kRoot) return kRootMassScale * m_[i];
+    if ((flags_[i] & kLeaf) && parent_[i] != kNone) return std::min(m_[i], m_[parent_[i]]);
+    return m_[i];
+  };
   auto member = [&](uint32_t i, auto&& visit) {
     // A group: the particle, its parent and its children (all currently connected).
     visit(i);
