@@ -48,7 +48,9 @@ struct ParticleSpecies {
 
   // --- Material (§4.3) ---
   float stiffness = 1.0f;        // s at full age (most of the paper's results use 1)
-  float stiffnessStart = 0.2f;   // s at birth: s = clamp(start + (1 − start)·age / stiffnessTime) · stiffness
+  float stiffnessStart = 1.0f;   // s at birth: s = clamp(start + (1 − start)·age / stiffnessTime) · stiffness.
+                                 // The paper starts at 0.2; young particles that soft can be flung
+                                 // while a plant grows fast in open air, so the default is 1.
   float stiffnessTime = 10.0f;   // t_m: seconds (simulated) until full stiffness
   float breakThreshold = 0.0f;   // t_s in [0, 1]: 0 never breaks; connections break above a
                                  // strain of (1 − t_s)·maxStrain
