@@ -26,7 +26,13 @@ inline CommandResult runCommand(const std::string& command, const std::filesyste
   return r;
 }
 
-inline std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+inline std::string quoted(const std::filesystem::path& p) {
+  // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) about "'" + string&&.
+  std::string q = "'";
+  q += p.string();
+  q += '\'';
+  return q;
+}
 
 // The Tendril CLI with arguments.
 inline CommandResult runTendril(const std::string& args, const std::filesystem::path& scratch) {
