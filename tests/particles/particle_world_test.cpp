@@ -80,7 +80,6 @@ float horizontalSag(float stiffness) {
   auto env = makeEnv(R"({"obstacles": []})");
   WorldSettings ws;
   ws.plantCollisions = false;
-  if (const char* it = getenv("SAG_ITER")) ws.iterations = atoi(it);
   ParticleWorld w(ws);
   ParticleSpecies s = chainSpecies(12);
   s.stiffness = stiffness;

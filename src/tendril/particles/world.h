@@ -5,16 +5,17 @@
 // reused, as the paper's single particle buffer. A particle is one internode: an ellipsoid
 // with long half-axis `halfLength` along its local +Y (the growth direction) and radius b = c.
 // Its group is {parent, itself, children}; each step predicts positions (eq. 1, 16), matches
-// every group's rest shape (eq. 3, 14–15, with a rotation extraction that stays stable for
-// collinear chains), blends the targets into goals (eq. 4) with age-dependent stiffness
-// (§4.3), applies anchors (eq. 5), resolves collisions with obstacle SDFs and with other
-// particles (§5.2), integrates (eq. 17–20) and breaks over-stretched connections (§4.3).
+// the groups' rest shapes (eq. 3, 14–15, with a rotation extraction that stays stable for
+// collinear chains) from each piece's root outward, blends the targets into goals (eq. 4) with
+// age-dependent stiffness (§4.3), applies anchors (eq. 5), resolves collisions with obstacle
+// SDFs and with other particles (§5.2), integrates (eq. 17–20) and breaks over-stretched
+// connections (§4.3).
 // Growth (§4.2) elongates apices, spawns successors and lateral branches, turns apices toward
 // surfaces and light (eq. 6–10), thickens older particles and grows leaves.
 //
-// All parallel loops write only to their own particle's slots and read the previous state, and
-// topology changes are made sequentially in particle order: results are bit-identical for any
-// thread count. Random numbers are keyed by (seed, plant, particle, step, purpose).
+// Parallel loops write only to their own particle's slots (shape matching: to their own
+// connected piece's) and read the previous state, and topology changes are made sequentially in
+// particle order: results are bit-identical for any thread count. Random numbers are keyed by (seed, plant, particle, step, purpose).
 #pragma once
 
 #include "tendril/env/environment.h"
