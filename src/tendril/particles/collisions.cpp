@@ -153,7 +153,9 @@ void ParticleWorld::collideParticles() {
   parallelFor(0, n, [&](size_t ii) {
     const uint32_t i = uint32_t(ii);
     goal_[i] = xp_[i];
-    if (!(flags_[i] & kActive) || (flags_[i] & (kRoot | kLeaf))) return;
+    // Anchored particles are held at their surface point and leave the push to the free
+    // particles that meet them (most of a climber's stems are anchored: this is most of the cost).
+    if (!(flags_[i] & kActive) || (flags_[i] & (kRoot | kLeaf | kAnchored))) return;
     const Vec3 axisI = qp_[i] * Vec3(0, a_[i], 0);
     const Vec3 ai = xp_[i] - axisI, bi = xp_[i] + axisI;
     const Eigen::Vector3i c = cellOf(xp_[i]);
@@ -181,8 +183,9 @@ void ParticleWorld::collideParticles() {
             if (dist >= minDist || dist < 1e-9f) continue;
             // Displace along the contact normal, in proportion to the other's mass; each side
             // moves half, as the other particle does the same from its side.
-            const float share = m_[j] / (m_[i] + m_[j]);
-            push += d / dist * (0.5f * (minDist - dist) * share);
+            // An anchored (or root) particle does not move: this one takes the whole way.
+            const float share = (flags_[j] & (kAnchored | kRoot)) ? 1.0f : 0.5f * m_[j] / (m_[i] + m_[j]);
+            push += d / dist * ((minDist - dist) * share);
           }
         }
     // Never more than a radius per step: a deep tangle resolves over a few steps.
