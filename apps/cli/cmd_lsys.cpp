@@ -29,6 +29,8 @@ struct LsysOptions {
   int64_t seed = -1;
   std::vector<std::string> defines;
   std::string scene;
+  std::string at;
+  std::string heading;
   bool print = false;
   int radialSegments = 8;
   CommonOptions common;
@@ -74,6 +76,25 @@ int runLsys(const LsysOptions& o) {
   }
 
   lsystem::RunOptions run;
+  if (!o.at.empty()) run.start.position = parseVec3(o.at, "--at");
+  if (!o.heading.empty()) {
+    const Vec3 h = parseVec3(o.heading, "--heading");
+    if (!(h.norm() > 1e-6f)) throw Error("command line", "--heading", "the heading must not be zero");
+    run.start.heading = h.normalized();
+    // Keep U (the side away from a support) perpendicular to the new heading.
+    Vec3 up = run.start.up - run.start.up.dot(run.start.heading) * run.start.heading;
+    if (up.norm() < 1e-3f) up = anyPerpendicular(run.start.heading);
+    run.start.up = up.normalized();
+  }
+  // The first few millimetres of growth must be outside every obstacle: a start on the ground
+  // is fine, one at the foot of a wall standing on it is not. (The exact query ties there, at a
+  // point on one surface and inside another; the distance grids do not.)
+  const Vec3 probe = run.start.position + 0.005f * run.start.heading;
+  if (scene && (environment.exactSignedDistance(probe, 1.0f) < 0.0f || environment.signedDistance(probe) < -1e-3f))
+    throw Error("command line", "--at",
+                fmt::format("the plant would start at ({:.3g}, {:.3g}, {:.3g}), inside an obstacle of {}; "
+                            "give --at x,y,z in front of a surface",
+                            run.start.position.x(), run.start.position.y(), run.start.position.z(), o.scene));
   if (o.seed >= 0) run.seed = uint64_t(o.seed);
   if (o.steps >= 0) run.derivationLength = int(o.steps);
   lsystem::LSystem ls(grammar, run);
@@ -127,6 +148,8 @@ RegisterCommand registerLsys("lsys", "Derive an L-system grammar and write the p
   sub.add_option("--seed", o->seed, "Random seed (overrides the grammar's seed:)")->check(CLI::NonNegativeNumber);
   sub.add_option("-D,--define", o->defines, "Override a define: constant, NAME=NUMBER (repeatable)");
   sub.add_option("--scene", o->scene, "Grow in this scene's environment (its obstacles, lights, strokes)");
+  sub.add_option("--at", o->at, "Where the plant stands, x,y,z (m); default 0,0,0");
+  sub.add_option("--heading", o->heading, "The turtle's first heading, x,y,z; default 0,1,0 (up)");
   sub.add_flag("--print", o->print, "Print the derived string");
   sub.add_option("--radial-segments", o->radialSegments, "Vertices around each branch")->check(CLI::Range(3, 64));
   addCommonOptions(sub, o->common);

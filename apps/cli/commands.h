@@ -2,6 +2,8 @@
 // them into CLI11 subcommands and maps errors to exit codes (0 ok, 2 bad input, 1 internal).
 #pragma once
 
+#include "tendril/core/math.h"
+
 #include <CLI/CLI.hpp>
 
 #include <functional>
@@ -37,5 +39,7 @@ struct CommonOptions {
 void addCommonOptions(CLI::App& sub, CommonOptions& options);
 // Applies --threads and --quiet (log level).
 void applyCommonOptions(const CommonOptions& options);
+// "x,y,z" → Vec3; anything else is an Error naming the option.
+Vec3 parseVec3(const std::string& text, const char* option);
 
 }  // namespace tendril::cli

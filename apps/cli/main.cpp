@@ -5,7 +5,11 @@
 #include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <charconv>
+#include <cmath>
 #include <cstdio>
 
 namespace tendril::cli {
@@ -24,6 +28,31 @@ void addCommonOptions(CLI::App& sub, CommonOptions& options) {
 void applyCommonOptions(const CommonOptions& options) {
   setThreadCount(options.threads);
   if (options.quiet) log::setLevel(log::Level::Error);
+}
+
+// "x,y,z" → Vec3; anything else is an Error naming the option.
+Vec3 parseVec3(const std::string& text, const char* option) {
+  auto fail = [&]() -> Error {
+    return Error("command line", option, fmt::format("expected three comma-separated numbers such as 1.5,2,4 (got \"{}\")", text));
+  };
+  Vec3 v;
+  const char* p = text.data();
+  const char* end = text.data() + text.size();
+  for (int i = 0; i < 3; ++i) {
+    while (p < end && *p == ' ') ++p;
+    float x = 0.0f;
+    auto [next, ec] = std::from_chars(p, end, x);
+    if (ec != std::errc() || !std::isfinite(x)) throw fail();
+    v[i] = x;
+    p = next;
+    while (p < end && *p == ' ') ++p;
+    if (i < 2) {
+      if (p == end || *p != ',') throw fail();
+      ++p;
+    }
+  }
+  if (p != end) throw fail();
+  return v;
 }
 
 }  // namespace tendril::cli

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 namespace tendril::lsystem {
 namespace {
 
@@ -80,6 +82,29 @@ TEST(LSystemCli, CommandLineErrorsExit2) {
   EXPECT_EQ(r.exitCode, 2);
   EXPECT_EQ(r.err, "tendril: error: <built-in>/grammars/abop-1.24a.ls: cannot set \"nope\": the grammar defines no "
                    "such constant (its define: constants: none)\n");
+}
+
+TEST(LSystemCli, AtPlacesThePlantInAScene) {
+  auto dir = scratchDir();
+  const std::string scene = quoted(tendril::test::sourceDir() / "examples/scenes/default.json");
+  // The default scene's wall stands at the origin: starting there is an error, not a stump.
+  auto r = runTendril("lsys japanese-ivy -n 60 --scene " + scene + " -o " + quoted(dir / "a.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_EQ(r.err.rfind("tendril: error: command line:--at: the plant would start at (0, 0, 0), inside an obstacle", 0),
+            0u)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "a.glb"));
+  // In front of the wall it climbs.
+  r = runTendril("lsys japanese-ivy -n 60 --scene " + scene + " --at -1.1,0.02,0.15 -o " + quoted(dir / "b.glb"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("segments"), std::string::npos);
+  r = runTendril("lsys japanese-ivy --at 1,2 -o " + quoted(dir / "c.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.err.find("command line:--at: expected three comma-separated numbers"), std::string::npos) << r.err;
+  r = runTendril("lsys japanese-ivy --heading 0,0,0 -o " + quoted(dir / "c.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_NE(r.err.find("command line:--heading: the heading must not be zero"), std::string::npos) << r.err;
 }
 
 TEST(LSystemCli, ScenePlantsWithTheLSystemModel) {
