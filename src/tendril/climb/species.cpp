@@ -1,10 +1,10 @@
 #include "tendril/climb/species.h"
 
 #include "tendril/core/json_reader.h"
+#include "tendril/plant/species_materials.h"
 
 #include <nlohmann/json.hpp>
 
-#include <filesystem>
 
 namespace tendril::climb {
 
@@ -20,16 +20,6 @@ const char* ruleName(RuleKind kind) {
   return "?";
 }
 
-namespace {
-
-std::string resolveTexture(const std::string& spec, const std::string& baseDir) {
-  if (spec.rfind("builtin:", 0) == 0 || baseDir.empty()) return spec;
-  std::filesystem::path p(spec);
-  if (p.is_absolute()) return spec;
-  return (std::filesystem::path(baseDir) / p).lexically_normal().string();
-}
-
-}  // namespace
 
 void readClimbSpecies(JsonObject& o, ClimbSpecies& s, const std::string& baseDir) {
   s.name = o.string("name", s.name);
@@ -81,27 +71,7 @@ void readClimbSpecies(JsonObject& o, ClimbSpecies& s, const std::string& baseDir
   s.crowdingLimit = int(o.integer("crowding_limit", s.crowdingLimit, 1, 100000));
 
   if (auto l = o.optionalObject("leaf")) {
-    if (l->has("textures")) {
-      const Json* tex = l->find("textures");
-      if (!tex->is_array() || tex->empty())
-        throw l->error("textures", "expected a non-empty array of texture names or image paths");
-      float aspect = l->numberf("aspect", s.leafShapes.empty() ? 1.0f : s.leafShapes[0].aspect, 0.05, 20.0);
-      Vec3 tint = l->vec3("tint", Vec3::Ones(), 0.0, 10.0);
-      s.leafShapes.clear();
-      for (size_t i = 0; i < tex->size(); ++i) {
-        if (!(*tex)[i].is_string())
-          throw Error(l->source(), l->pointerTo("textures") + "/" + std::to_string(i),
-                      "expected a string, got " + describeJson((*tex)[i]));
-        s.leafShapes.push_back({resolveTexture((*tex)[i].get<std::string>(), baseDir), aspect, tint});
-      }
-    } else {
-      float aspect = l->numberf("aspect", s.leafShapes.empty() ? 1.0f : s.leafShapes[0].aspect, 0.05, 20.0);
-      Vec3 tint = l->vec3("tint", s.leafShapes.empty() ? Vec3::Ones() : s.leafShapes[0].tint, 0.0, 10.0);
-      for (auto& shape : s.leafShapes) {
-        shape.aspect = aspect;
-        shape.tint = tint;
-      }
-    }
+    plant::readLeafShapes(*l, s.leafShapes, baseDir);
     s.leafSpread = l->angle("spread", degrees(s.leafSpread), 0.0, 90.0);
     s.leafJitter = l->angle("jitter", degrees(s.leafJitter), 0.0, 45.0);
     s.leafPetiole = l->numberf("petiole", s.leafPetiole, 0.0, 1.0);
@@ -109,13 +79,7 @@ void readClimbSpecies(JsonObject& o, ClimbSpecies& s, const std::string& baseDir
     s.leafThickness = l->numberf("thickness", s.leafThickness, 0.0, 0.1);
     l->finish();
   }
-  if (auto b = o.optionalObject("bark")) {
-    std::string tex = b->string("texture", s.bark.texture);
-    s.bark.texture = resolveTexture(tex, baseDir);
-    s.bark.color = b->vec3("color", s.bark.color, 0.0, 1.0);
-    s.bark.roughness = b->numberf("roughness", s.bark.roughness, 0.0, 1.0);
-    b->finish();
-  }
+  if (auto b = o.optionalObject("bark")) plant::readBark(*b, s.bark, baseDir);
 
   if (const Json* rules = o.find("rules")) {
     if (!rules->is_array()) throw o.error("rules", "expected an array of rules, got " + describeJson(*rules));

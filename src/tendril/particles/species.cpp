@@ -1,19 +1,13 @@
 #include "tendril/particles/species.h"
 
 #include "tendril/core/json_reader.h"
+#include "tendril/plant/species_materials.h"
 
 #include <nlohmann/json.hpp>
 
-#include <filesystem>
 
 namespace tendril::particles {
 
-namespace {
-std::string resolveTexture(const std::string& spec, const std::string& baseDir) {
-  if (spec.rfind("builtin:", 0) == 0 || baseDir.empty() || std::filesystem::path(spec).is_absolute()) return spec;
-  return (std::filesystem::path(baseDir) / spec).lexically_normal().string();
-}
-}  // namespace
 
 void readParticleSpecies(JsonObject& o, ParticleSpecies& s, const std::string& baseDir) {
   s.name = o.string("name", s.name);
@@ -58,26 +52,7 @@ void readParticleSpecies(JsonObject& o, ParticleSpecies& s, const std::string& b
   s.elasticity = o.numberf("elasticity", s.elasticity, 0.0, 1.0);
 
   if (auto l = o.optionalObject("leaf")) {
-    if (const Json* tex = l->find("textures")) {
-      if (!tex->is_array() || tex->empty())
-        throw l->error("textures", "expected a non-empty array of texture names or image paths");
-      float aspect = l->numberf("aspect", 1.0f, 0.05, 20.0);
-      Vec3 tint = l->vec3("tint", Vec3::Ones(), 0.0, 10.0);
-      s.leafShapes.clear();
-      for (size_t i = 0; i < tex->size(); ++i) {
-        if (!(*tex)[i].is_string())
-          throw Error(l->source(), l->pointerTo("textures") + "/" + std::to_string(i),
-                      "expected a string, got " + describeJson((*tex)[i]));
-        s.leafShapes.push_back({resolveTexture((*tex)[i].get<std::string>(), baseDir), aspect, tint});
-      }
-    } else {
-      float aspect = l->numberf("aspect", s.leafShapes.empty() ? 1.0f : s.leafShapes[0].aspect, 0.05, 20.0);
-      Vec3 tint = l->vec3("tint", s.leafShapes.empty() ? Vec3::Ones() : s.leafShapes[0].tint, 0.0, 10.0);
-      for (auto& shape : s.leafShapes) {
-        shape.aspect = aspect;
-        shape.tint = tint;
-      }
-    }
+    plant::readLeafShapes(*l, s.leafShapes, baseDir);
     s.phyllotaxisAngle = l->angle("phyllotaxis_angle", degrees(s.phyllotaxisAngle), 0.0, 360.0);
     s.leafStep = int(l->integer("step", s.leafStep, 0, 1000));
     s.leafSize = l->numberf("size", s.leafSize, 0.0, 5.0);
@@ -88,12 +63,7 @@ void readParticleSpecies(JsonObject& o, ParticleSpecies& s, const std::string& b
     s.leafParticleLimit = int(l->integer("particle_limit", s.leafParticleLimit, 0, 100000000));
     l->finish();
   }
-  if (auto b = o.optionalObject("bark")) {
-    s.bark.texture = resolveTexture(b->string("texture", s.bark.texture), baseDir);
-    s.bark.color = b->vec3("color", s.bark.color, 0.0, 1.0);
-    s.bark.roughness = b->numberf("roughness", s.bark.roughness, 0.0, 1.0);
-    b->finish();
-  }
+  if (auto b = o.optionalObject("bark")) plant::readBark(*b, s.bark, baseDir);
 }
 
 }  // namespace tendril::particles
