@@ -677,7 +677,7 @@ Vec3 Environment::attraction(const Vec3& p) const {
   return sum / weightSum * maxWeight;
 }
 
-Vec3 Environment::wind(const Vec3&, float) const { return wind_; }
+Vec3 Environment::wind(const Vec3& p, float t) const { return wind_.sample(p, t); }
 
 Bounds3 Environment::bounds() const {
   Bounds3 b;

@@ -12,6 +12,7 @@
 
 #include "tendril/core/math.h"
 #include "tendril/core/triangle_mesh.h"
+#include "tendril/env/wind_field.h"
 
 #include <cstdint>
 #include <memory>
@@ -111,7 +112,15 @@ class Environment {
   const std::vector<Stroke>& strokes() const { return strokes_; }
   void setStrokes(std::vector<Stroke> strokes);
 
-  void setWind(const Vec3& velocity) { wind_ = velocity; }
+  void setWind(const Vec3& velocity) {
+    WindSettings w;
+    w.velocity = velocity;
+    wind_.setSettings(std::move(w));
+  }
+  void setWind(WindSettings settings) { wind_.setSettings(std::move(settings)); }
+  // The simulated air the sph wind mode samples (not owned; null = none).
+  void setAirFlow(const AirFlow* air) { wind_.setAirFlow(air); }
+  const WindField& windField() const { return wind_; }
 
   // Rebuilds the BVH (and stroke lookup) after edits. Cheap when nothing changed.
   void commit();
@@ -168,7 +177,7 @@ class Environment {
   std::vector<Light> lights_;
   std::vector<Stroke> strokes_;
   std::unique_ptr<StrokeGrid> strokeGrid_;
-  Vec3 wind_ = Vec3::Zero();
+  WindField wind_;
   void* scene_ = nullptr;  // RTCScene
   bool dirty_ = true;
 };

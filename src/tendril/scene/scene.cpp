@@ -98,6 +98,32 @@ env::Light readLight(JsonObject& o) {
   return l;
 }
 
+env::WindSettings readWind(JsonObject& o) {
+  env::WindSettings w;
+  std::string mode = o.choice("mode", "constant", {"constant", "gusty", "sph"});
+  w.mode = mode == "gusty" ? env::WindMode::Gusty : mode == "sph" ? env::WindMode::Sph : env::WindMode::Constant;
+  w.velocity = o.vec3("velocity", w.velocity, -200.0, 200.0);
+  w.gustStrength = o.numberf("gust_strength", w.gustStrength, 0.0, 1.0);
+  w.gustPeriod = o.numberf("gust_period", w.gustPeriod, 0.05, 3600.0);
+  w.gustScale = o.numberf("gust_scale", w.gustScale, 0.01, 1e4);
+  w.gustTurn = o.angle("gust_turn", degrees(w.gustTurn), 0.0, 90.0);
+  w.seed = o.seed("seed", w.seed);
+  for (JsonObject& e : o.objectArray("emitters")) {
+    env::WindEmitter em;
+    em.position = e.requiredVec3("position");
+    em.direction = e.direction("direction", em.direction);
+    em.speed = e.numberf("speed", em.speed, 0.0, 200.0);
+    em.radius = e.numberf("radius", em.radius, 0.001, 100.0);
+    em.reach = e.numberf("reach", em.reach, 0.01, 1e4);
+    em.spread = e.angle("spread", degrees(em.spread), 0.0, 45.0);
+    em.rate = e.numberf("rate", em.rate, 0.0, 1e7);
+    e.finish();
+    w.emitters.push_back(em);
+  }
+  o.finish();
+  return w;
+}
+
 env::Stroke readStroke(JsonObject& o) {
   env::Stroke s;
   std::string kind = o.choice("kind", "attract", {"attract", "repel"});
@@ -169,10 +195,7 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
     }
     for (JsonObject& l : e->objectArray("lights")) scene.lights.push_back(readLight(l));
     for (JsonObject& s : e->objectArray("strokes")) scene.strokes.push_back(readStroke(s));
-    if (auto w = e->optionalObject("wind")) {
-      scene.wind = w->vec3("velocity", Vec3::Zero(), -1e3, 1e3);
-      w->finish();
-    }
+    if (auto w = e->optionalObject("wind")) scene.wind = readWind(*w);
     e->finish();
   }
   std::vector<JsonObject> plants = root.objectArray("plants");
@@ -187,6 +210,12 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
     scene.output.radialSegments = int(o->integer("radial_segments", scene.output.radialSegments, 3, 64));
     scene.output.subdivisions = int(o->integer("subdivisions", scene.output.subdivisions, 1, 16));
     scene.output.includeObstacles = o->boolean("include_obstacles", scene.output.includeObstacles);
+    if (auto a = o->optionalObject("wind_animation")) {
+      scene.output.animationSeconds = a->numberf("seconds", 4.0, 0.1, 600.0);
+      scene.output.animationFps = int(a->integer("fps", scene.output.animationFps, 1, 240));
+      scene.output.animationJoints = int(a->integer("joints", scene.output.animationJoints, 1, 1024));
+      a->finish();
+    }
     o->finish();
   }
   root.finish();

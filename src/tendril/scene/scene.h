@@ -20,6 +20,10 @@ struct OutputSettings {
   int radialSegments = 8;       // around each branch
   int subdivisions = 3;         // spline samples per segment
   bool includeObstacles = false;  // write the obstacles into the exported files too
+  // A looping wind animation (Growth-Flow motion) written next to the plant; 0 s = none.
+  float animationSeconds = 0.0f;
+  int animationFps = 24;
+  int animationJoints = 128;      // joints per plant's skin
 };
 
 struct Scene {
@@ -32,7 +36,7 @@ struct Scene {
   std::vector<env::ObstacleDef> obstacles;
   std::vector<env::Light> lights;
   std::vector<env::Stroke> strokes;
-  Vec3 wind = Vec3::Zero();
+  env::WindSettings wind;
   std::vector<PlantSpec> plants;
   OutputSettings output;
 };
