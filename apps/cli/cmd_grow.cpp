@@ -1,4 +1,5 @@
-// tendril grow SCENE -o DIR: grows every plant of a scene and writes plant.glb / plant.obj.
+// tendril grow SCENE -o DIR: grows every plant of a scene and writes plant.glb / plant.obj (and
+// plant-wind.glb, a looping wind animation, when asked).
 #include "commands.h"
 
 #include "tendril/core/error.h"
@@ -6,6 +7,7 @@
 #include "tendril/core/progress.h"
 #include "tendril/core/timer.h"
 #include "tendril/io/export_model.h"
+#include "tendril/io/gltf_animation.h"
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
 #include "tendril/plant/plant_model.h"
@@ -26,6 +28,7 @@ struct GrowOptions {
   int64_t steps = -1;
   int64_t seed = -1;
   int64_t every = 0;
+  double windAnimation = -1.0;  // seconds; < 0: the scene's output.wind_animation
   std::string formats = "glb,obj";
   CommonOptions common;
 };
@@ -116,6 +119,23 @@ int runGrow(const GrowOptions& o) {
   written.clear();
   writeFiles("plant");
 
+  // A looping clip of the grown plants moving in the scene's wind (Growth-Flow motion).
+  float clipSeconds = o.windAnimation >= 0.0 ? float(o.windAnimation) : sc.output.animationSeconds;
+  if (clipSeconds > 0.0f) {
+    std::vector<wind::GrowthFlowSpecies> species = session.growthFlow();
+    std::vector<io::AnimatedPlant> animated;
+    for (size_t i = 0; i < exportScene.plants.size(); ++i) animated.push_back({&exportScene.plants[i], species[i]});
+    io::WindAnimationOptions a;
+    a.seconds = clipSeconds;
+    a.fps = sc.output.animationFps;
+    a.maxJoints = sc.output.animationJoints;
+    a.seed = sc.seed;
+    a.mesh = options.mesh;
+    std::filesystem::path file = outDir / "plant-wind.glb";
+    io::writeWindAnimationGlb(animated, session.environment().windField(), a, file);
+    written.push_back(file.string());
+  }
+
   if (!o.common.quiet) {
     size_t segments = 0, leaves = 0;
     for (const plant::PlantModel& p : exportScene.plants) {
@@ -145,6 +165,10 @@ RegisterCommand registerGrow("grow", "Grow every plant of a scene and write the 
   sub.add_option("--every", o->every,
                  "Also write the plants every K steps as a numbered sequence (plant_000040.glb, ...)")
       ->check(CLI::Range(1, 10000000));
+  sub.add_option("--wind-animation", o->windAnimation,
+                 "Also write plant-wind.glb: a looping clip of this many seconds of the plants moving in the "
+                 "scene's wind (overrides output.wind_animation; 0 = none)")
+      ->check(CLI::Range(0.0, 600.0));
   sub.add_option("--format", o->formats, "Comma-separated output formats: glb, obj")->capture_default_str();
   addCommonOptions(sub, o->common);
   return [o] { return runGrow(*o); };

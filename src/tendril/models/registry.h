@@ -7,6 +7,7 @@
 #include "tendril/env/environment.h"
 #include "tendril/plant/plant_model.h"
 #include "tendril/scene/plant_spec.h"
+#include "tendril/wind/growth_flow.h"
 
 #include <filesystem>
 #include <functional>
@@ -32,6 +33,8 @@ class PlantSystem {
   virtual plant::PlantModel snapshot(size_t plant) const = 0;
   // Skeleton segments of all plants (progress reports).
   virtual size_t segmentCount() const = 0;
+  // The plant's Growth-Flow constants (seed 001): how its growth and motion answer the wind.
+  virtual wind::GrowthFlowSpecies growthFlow(size_t /*plant*/) const { return {}; }
 };
 
 struct SystemContext {

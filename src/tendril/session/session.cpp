@@ -55,6 +55,13 @@ std::vector<plant::PlantModel> Session::plants() const {
   return out;
 }
 
+std::vector<wind::GrowthFlowSpecies> Session::growthFlow() const {
+  std::vector<wind::GrowthFlowSpecies> out;
+  out.reserve(plants_.size());
+  for (const PlantRef& r : plants_) out.push_back(systems_[r.system]->growthFlow(r.index));
+  return out;
+}
+
 size_t Session::segmentCount() const {
   size_t n = 0;
   for (const auto& s : systems_) n += s->segmentCount();

@@ -36,6 +36,8 @@ class Session {
 
   // Snapshots of every plant, in scene order.
   std::vector<plant::PlantModel> plants() const;
+  // The Growth-Flow constants of every plant, in scene order.
+  std::vector<wind::GrowthFlowSpecies> growthFlow() const;
   size_t segmentCount() const;
 
  private:

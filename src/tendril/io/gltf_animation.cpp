@@ -1,0 +1,394 @@
+#include "tendril/io/gltf_animation.h"
+
+#include "tendril/core/error.h"
+#include "tendril/core/parallel.h"
+#include "tendril/io/atomic_file.h"
+#include "tendril/io/export_model.h"
+#include "tendril/mesh/leaf_mesh.h"
+#include "tendril/wind/motion.h"
+
+#include <fmt/format.h>
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+#include <unordered_map>
+
+namespace tendril::io {
+
+std::vector<int32_t> chooseJoints(const plant::PlantModel& plant, int maxJoints) {
+  const size_t n = plant.nodeCount();
+  std::vector<uint32_t> subtree(n, 1);
+  for (size_t i = n; i-- > 0;)
+    if (plant.parent[i] >= 0) subtree[size_t(plant.parent[i])] += subtree[i];
+  std::vector<uint32_t> depth(n, 0);  // nodes since the last branch start
+  for (size_t i = 0; i < n; ++i) {
+    int32_t p = plant.parent[i];
+    bool start = p < 0 || (plant.flags[i] & plant::kNodeBranchStart);
+    depth[i] = start ? 0 : depth[size_t(p)] + 1;
+  }
+  std::vector<int32_t> joints;
+  for (uint32_t k = 1;; k *= 2) {
+    joints.clear();
+    for (size_t i = 0; i < n; ++i) {
+      bool root = plant.parent[i] < 0;
+      if (root || (subtree[i] >= k && depth[i] % k == 0)) joints.push_back(int32_t(i));
+    }
+    size_t roots = size_t(std::count(plant.parent.begin(), plant.parent.end(), -1));
+    if (joints.size() <= size_t(std::max(maxJoints, 1)) || joints.size() == roots || k > n) break;
+  }
+  return joints;
+}
+
+namespace {
+
+size_t align4(size_t n) { return (n + 3) & ~size_t(3); }
+
+// The binary buffer and its views.
+struct Bin {
+  tinygltf::Model& gltf;
+  std::vector<uint8_t>& data;
+
+  int view(const void* bytes, size_t size, int target) {
+    size_t at = data.size();
+    data.resize(align4(at + size));
+    if (size) std::memcpy(data.data() + at, bytes, size);
+    tinygltf::BufferView v;
+    v.buffer = 0;
+    v.byteOffset = at;
+    v.byteLength = size;
+    v.target = target;
+    gltf.bufferViews.push_back(v);
+    return int(gltf.bufferViews.size() - 1);
+  }
+  int accessor(int view, int component, int type, size_t count) {
+    tinygltf::Accessor a;
+    a.bufferView = view;
+    a.componentType = component;
+    a.type = type;
+    a.count = count;
+    gltf.accessors.push_back(a);
+    return int(gltf.accessors.size() - 1);
+  }
+};
+
+// For every vertex of a bark (or primitive) mesh, the node whose segment surface is nearest.
+// Segments go into every cell of a uniform grid their radius-expanded bounds touch, so the
+// cell of a vertex holds its own segment.
+std::vector<int32_t> nearestNodes(const plant::PlantModel& plant, const std::vector<Vec3>& points) {
+  const size_t n = plant.nodeCount();
+  std::vector<int32_t> out(points.size(), 0);
+  if (n == 0) return out;
+  std::vector<float> lengths(plant.length);
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  float cell = std::max(2.0f * lengths[lengths.size() / 2], 1e-3f);
+  struct Key {
+    int32_t x, y, z;
+    bool operator==(const Key&) const = default;
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      return size_t(k.x) * 73856093u ^ size_t(k.y) * 19349663u ^ size_t(k.z) * 83492791u;
+    }
+  };
+  auto keyOf = [&](const Vec3& p) {
+    return Key{int32_t(std::floor(p.x() / cell)), int32_t(std::floor(p.y() / cell)), int32_t(std::floor(p.z() / cell))};
+  };
+  std::unordered_map<Key, std::vector<int32_t>, KeyHash> grid;
+  for (size_t i = 0; i < n; ++i) {
+    Vec3 a = plant.position[i], b = plant.tip(i);
+    float pad = 2.0f * plant.radius[i] + 1e-4f;
+    Key lo = keyOf(a.cwiseMin(b) - Vec3::Constant(pad)), hi = keyOf(a.cwiseMax(b) + Vec3::Constant(pad));
+    for (int32_t x = lo.x; x <= hi.x; ++x)
+      for (int32_t y = lo.y; y <= hi.y; ++y)
+        for (int32_t z = lo.z; z <= hi.z; ++z) grid[Key{x, y, z}].push_back(int32_t(i));
+  }
+  parallelFor(size_t(0), points.size(), [&](size_t v) {
+    const Vec3& p = points[v];
+    auto it = grid.find(keyOf(p));
+    float best = std::numeric_limits<float>::max();
+    int32_t bestNode = -1;
+    auto consider = [&](int32_t i) {
+      Vec3 a = plant.position[size_t(i)], d = plant.tip(size_t(i)) - a;
+      float t = d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0f, 1.0f) : 0.0f;
+      float dist = std::fabs((p - (a + t * d)).norm() - plant.radius[size_t(i)]);
+      if (dist < best) {  // ties keep the lower index: candidates come in index order
+        best = dist;
+        bestNode = i;
+      }
+    };
+    if (it != grid.end())
+      for (int32_t i : it->second) consider(i);
+    if (bestNode < 0)  // a vertex off every segment's cell (end caps of very short segments)
+      for (size_t i = 0; i < n; ++i) consider(int32_t(i));
+    out[v] = bestNode;
+  }, 1024);
+  return out;
+}
+
+std::vector<double> toDoubles(const Vec4& v) { return {v.x(), v.y(), v.z(), v.w()}; }
+
+}  // namespace
+
+WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
+                                         const WindAnimationOptions& options, const std::filesystem::path& path) {
+  if (!(options.seconds > 0.0f) || options.fps < 1 || options.maxJoints < 1)
+    throw Error(path.string(), "", "wind animation needs seconds > 0, fps >= 1 and joints >= 1");
+  checkOutputPath(path);
+  ExportScene scene;
+  for (const AnimatedPlant& p : plants) scene.plants.push_back(*p.plant);
+  ExportOptions exportOptions;
+  exportOptions.mesh = options.mesh;
+  ExportModel model = buildExportModel(scene, exportOptions);
+
+  tinygltf::Model gltf;
+  gltf.asset.version = "2.0";
+  gltf.asset.generator = "Tendril " TENDRIL_VERSION;
+  std::vector<uint8_t> data;
+  Bin bin{gltf, data};
+  tinygltf::Scene gscene;
+  gscene.name = "Tendril wind";
+  tinygltf::Animation animation;
+  animation.name = "wind";
+
+  const int frames = std::max(2, int(std::lround(options.seconds * float(options.fps)))) + 1;
+  std::vector<float> times(static_cast<size_t>(frames));
+  for (int k = 0; k < frames; ++k) times[size_t(k)] = options.seconds * float(k) / float(frames - 1);
+  int timeAccessor = bin.accessor(bin.view(times.data(), times.size() * sizeof(float), 0),
+                                  TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, times.size());
+  gltf.accessors[size_t(timeAccessor)].minValues = {0.0};
+  gltf.accessors[size_t(timeAccessor)].maxValues = {double(options.seconds)};
+
+  WindAnimationStats stats;
+  stats.keyframes = size_t(frames);
+  for (size_t pi = 0; pi < plants.size(); ++pi) {
+    const plant::PlantModel& rest = *plants[pi].plant;
+    const ExportObject& object = model.objects[pi];
+    const mesh::PlantMesh& pm = model.plantMeshes[pi];
+    const size_t n = rest.nodeCount();
+
+    // The reduced hierarchy and each node's joint (nearest joint at or above it).
+    std::vector<int32_t> joints = chooseJoints(rest, options.maxJoints);
+    std::vector<int32_t> jointOfJointNode(n, -1);
+    for (size_t j = 0; j < joints.size(); ++j) jointOfJointNode[size_t(joints[j])] = int32_t(j);
+    std::vector<int32_t> jointOf(n, -1);
+    for (size_t i = 0; i < n; ++i)
+      jointOf[i] = jointOfJointNode[i] >= 0 ? jointOfJointNode[i] : jointOf[size_t(rest.parent[i])];
+    std::vector<int32_t> parentJoint(joints.size(), -1);
+    for (size_t j = 0; j < joints.size(); ++j) {
+      int32_t p = rest.parent[size_t(joints[j])];
+      parentJoint[j] = p < 0 ? -1 : jointOf[size_t(p)];
+    }
+
+    // Joint nodes: rest pose = translation to the node's position, relative to the parent joint.
+    const int firstNode = int(gltf.nodes.size());
+    for (size_t j = 0; j < joints.size(); ++j) {
+      tinygltf::Node node;
+      node.name = fmt::format("{}-joint-{}", object.name, j);
+      Vec3 p = rest.position[size_t(joints[j])];
+      if (parentJoint[j] >= 0) p -= rest.position[size_t(joints[size_t(parentJoint[j])])];
+      node.translation = {p.x(), p.y(), p.z()};
+      gltf.nodes.push_back(std::move(node));
+    }
+    for (size_t j = 0; j < joints.size(); ++j) {
+      if (parentJoint[j] >= 0)
+        gltf.nodes[size_t(firstNode + parentJoint[j])].children.push_back(firstNode + int(j));
+      else
+        gscene.nodes.push_back(firstNode + int(j));
+    }
+
+    tinygltf::Skin skin;
+    skin.name = object.name;
+    std::vector<float> inverseBind;
+    for (size_t j = 0; j < joints.size(); ++j) {
+      skin.joints.push_back(firstNode + int(j));
+      Vec3 p = rest.position[size_t(joints[j])];
+      float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -p.x(), -p.y(), -p.z(), 1};  // column-major
+      inverseBind.insert(inverseBind.end(), m, m + 16);
+    }
+    skin.inverseBindMatrices = bin.accessor(bin.view(inverseBind.data(), inverseBind.size() * sizeof(float), 0),
+                                            TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_MAT4, joints.size());
+    gltf.skins.push_back(skin);
+    const int skinIndex = int(gltf.skins.size() - 1);
+
+    // The skinned mesh: every part with JOINTS_0 / WEIGHTS_0.
+    tinygltf::Mesh gmesh;
+    gmesh.name = object.name;
+    const size_t nvLeaf = mesh::leafVertexCount(options.mesh);
+    for (const ExportPart& part : object.parts) {
+      const TriangleMesh& m = *part.mesh;
+      const size_t nv = m.positions.size();
+      std::vector<int32_t> nodeOfVertex;
+      int leafShape = -1;
+      for (size_t s = 0; s < pm.leaves.size(); ++s)
+        if (part.mesh == &pm.leaves[s]) leafShape = int(s);
+      if (leafShape >= 0) {
+        nodeOfVertex.resize(nv);
+        size_t slot = 0;
+        for (size_t l = 0; l < rest.leafCount(); ++l) {
+          if (rest.leafShape[l] != leafShape) continue;
+          for (size_t k = 0; k < nvLeaf; ++k) nodeOfVertex[slot * nvLeaf + k] = rest.leafNode[l];
+          ++slot;
+        }
+      } else {
+        nodeOfVertex = nearestNodes(rest, m.positions);
+      }
+      std::vector<uint16_t> jointIds(nv * 4, 0);
+      std::vector<float> weights(nv * 4, 0.0f);
+      for (size_t v = 0; v < nv; ++v) {
+        jointIds[4 * v] = uint16_t(jointOf[size_t(nodeOfVertex[v])]);
+        weights[4 * v] = 1.0f;
+      }
+      std::vector<Vec2> uvs(m.uvs.size());
+      for (size_t v = 0; v < m.uvs.size(); ++v) uvs[v] = Vec2(m.uvs[v].x(), 1.0f - m.uvs[v].y());
+
+      tinygltf::Primitive prim;
+      prim.mode = TINYGLTF_MODE_TRIANGLES;
+      prim.material = part.material;
+      int pa = bin.accessor(bin.view(m.positions.data(), nv * sizeof(Vec3), TINYGLTF_TARGET_ARRAY_BUFFER),
+                            TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
+      Bounds3 b;
+      for (const Vec3& p : m.positions) b.extend(p);
+      gltf.accessors[size_t(pa)].minValues = {b.min.x(), b.min.y(), b.min.z()};
+      gltf.accessors[size_t(pa)].maxValues = {b.max.x(), b.max.y(), b.max.z()};
+      prim.attributes["POSITION"] = pa;
+      if (!m.normals.empty())
+        prim.attributes["NORMAL"] =
+            bin.accessor(bin.view(m.normals.data(), nv * sizeof(Vec3), TINYGLTF_TARGET_ARRAY_BUFFER),
+                         TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
+      if (!uvs.empty())
+        prim.attributes["TEXCOORD_0"] = bin.accessor(bin.view(uvs.data(), nv * sizeof(Vec2), TINYGLTF_TARGET_ARRAY_BUFFER),
+                                                     TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, nv);
+      prim.attributes["JOINTS_0"] =
+          bin.accessor(bin.view(jointIds.data(), jointIds.size() * sizeof(uint16_t), TINYGLTF_TARGET_ARRAY_BUFFER),
+                       TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT, TINYGLTF_TYPE_VEC4, nv);
+      prim.attributes["WEIGHTS_0"] =
+          bin.accessor(bin.view(weights.data(), weights.size() * sizeof(float), TINYGLTF_TARGET_ARRAY_BUFFER),
+                       TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, nv);
+      prim.indices = bin.accessor(bin.view(m.indices.data(), m.indices.size() * sizeof(uint32_t),
+                                           TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
+                                  TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, m.indices.size());
+      gmesh.primitives.push_back(std::move(prim));
+    }
+    if (!gmesh.primitives.empty()) {
+      gltf.meshes.push_back(std::move(gmesh));
+      tinygltf::Node meshNode;
+      meshNode.name = object.name;
+      meshNode.mesh = int(gltf.meshes.size() - 1);
+      meshNode.skin = skinIndex;
+      gltf.nodes.push_back(std::move(meshNode));
+      gscene.nodes.push_back(int(gltf.nodes.size() - 1));
+    }
+
+    // Keyframes: Growth-Flow sway with a period that divides the clip.
+    wind::MotionSettings ms;
+    ms.loopSeconds = options.seconds;
+    ms.seed = options.seed + pi;
+    wind::WindMotion motion(rest, plants[pi].species, ms);
+    plant::PlantModel posed;
+    std::vector<std::vector<float>> rot(joints.size(), std::vector<float>(size_t(frames) * 4));
+    std::vector<std::vector<float>> trans(joints.size(), std::vector<float>(size_t(frames) * 3));
+    const float dt = options.seconds / float(frames - 1);
+    for (int k = 0; k < frames; ++k) {
+      motion.step(times[size_t(k)], dt, wind, posed);
+      const std::vector<Quat>& Q = motion.nodeRotation();
+      for (size_t j = 0; j < joints.size(); ++j) {
+        size_t node = size_t(joints[j]);
+        Quat q = Q[node];
+        Vec3 p = posed.position[node];
+        if (parentJoint[j] >= 0) {
+          size_t pn = size_t(joints[size_t(parentJoint[j])]);
+          Quat qp = Q[pn];
+          q = (qp.conjugate() * q).normalized();
+          p = qp.conjugate() * (p - posed.position[pn]);
+        }
+        if (q.w() < 0.0f) q.coeffs() = -q.coeffs();  // one hemisphere: no spurious flips
+        float* r = &rot[j][size_t(k) * 4];
+        r[0] = q.x(), r[1] = q.y(), r[2] = q.z(), r[3] = q.w();
+        float* t = &trans[j][size_t(k) * 3];
+        t[0] = p.x(), t[1] = p.y(), t[2] = p.z();
+      }
+    }
+    for (size_t j = 0; j < joints.size(); ++j) {
+      bool moves = false;
+      for (int k = 0; k < frames && !moves; ++k) moves = rot[j][size_t(k) * 4 + 3] < 1.0f - 1e-7f;
+      if (!moves) continue;
+      int ra = bin.accessor(bin.view(rot[j].data(), rot[j].size() * sizeof(float), 0), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                            TINYGLTF_TYPE_VEC4, size_t(frames));
+      int ta = bin.accessor(bin.view(trans[j].data(), trans[j].size() * sizeof(float), 0),
+                            TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, size_t(frames));
+      for (auto [accessor, pathName] : {std::pair{ra, "rotation"}, std::pair{ta, "translation"}}) {
+        tinygltf::AnimationSampler sampler;
+        sampler.input = timeAccessor;
+        sampler.output = accessor;
+        sampler.interpolation = "LINEAR";
+        animation.samplers.push_back(sampler);
+        tinygltf::AnimationChannel channel;
+        channel.sampler = int(animation.samplers.size() - 1);
+        channel.target_node = firstNode + int(j);
+        channel.target_path = pathName;
+        animation.channels.push_back(channel);
+      }
+    }
+    stats.joints += joints.size();
+  }
+  gltf.scenes.push_back(std::move(gscene));
+  gltf.defaultScene = 0;
+  if (!animation.channels.empty()) gltf.animations.push_back(std::move(animation));
+
+  // Materials, samplers, textures and images as the static writer makes them.
+  for (const ExportMaterial& m : model.materials) {
+    tinygltf::Material g;
+    g.name = m.name;
+    g.pbrMetallicRoughness.baseColorFactor = toDoubles(m.baseColor);
+    g.pbrMetallicRoughness.metallicFactor = m.metallic;
+    g.pbrMetallicRoughness.roughnessFactor = m.roughness;
+    g.pbrMetallicRoughness.baseColorTexture.index = m.texture;
+    if (m.alphaMask) {
+      g.alphaMode = "MASK";
+      g.alphaCutoff = 0.5;
+    }
+    g.doubleSided = m.doubleSided;
+    gltf.materials.push_back(std::move(g));
+  }
+  int samplerOf[2] = {-1, -1};
+  for (const ExportTexture& t : model.textures) {
+    int& s = samplerOf[t.repeat ? 1 : 0];
+    if (s < 0) {
+      tinygltf::Sampler sampler;
+      sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
+      sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
+      sampler.wrapS = sampler.wrapT = t.repeat ? TINYGLTF_TEXTURE_WRAP_REPEAT : TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
+      gltf.samplers.push_back(sampler);
+      s = int(gltf.samplers.size() - 1);
+    }
+    tinygltf::Texture texture;
+    texture.sampler = s;
+    texture.source = t.image;
+    gltf.textures.push_back(texture);
+  }
+  for (const ExportImage& img : model.images) {
+    tinygltf::Image image;
+    image.name = std::filesystem::path(img.spec).filename().string();
+    image.mimeType = img.image.mimeType;
+    image.bufferView = bin.view(img.image.bytes.data(), img.image.bytes.size(), 0);
+    gltf.images.push_back(std::move(image));
+  }
+  tinygltf::Buffer buffer;
+  buffer.data = std::move(data);
+  gltf.buffers.push_back(std::move(buffer));
+  std::ostringstream out;
+  tinygltf::TinyGLTF tiny;
+  if (!tiny.WriteGltfSceneToStream(&gltf, out, false, true))
+    throw Error(path.string(), "", "cannot write .glb: tinygltf could not serialise the animation");
+  std::string bytes = out.str();
+  AtomicFileWriter file(path);
+  file.write(bytes);
+  file.commit();
+  stats.bytes = bytes.size();
+  return stats;
+}
+
+}  // namespace tendril::io

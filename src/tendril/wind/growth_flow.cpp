@@ -1,0 +1,145 @@
+#include "tendril/wind/growth_flow.h"
+
+#include "tendril/core/json_reader.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tendril::wind {
+
+GrowthFlowSpecies GrowthFlowSpecies::read(JsonObject& o) {
+  GrowthFlowSpecies s;
+  s.windMin = o.numberf("wind_min", s.windMin, 0.0, 100.0);
+  s.windMax = o.numberf("wind_max", s.windMax, 0.0, 200.0);
+  if (s.windMax <= s.windMin) throw o.error("wind_max", "must be greater than wind_min");
+  s.radiusRate = o.numberf("radius_rate", s.radiusRate, 0.0, 1.0);
+  s.radiusSensitivity = o.numberf("radius_sensitivity", s.radiusSensitivity, 0.0, 1.0);
+  s.lengthSensitivity = o.numberf("length_sensitivity", s.lengthSensitivity, 0.0, 1.0);
+  s.maxLength = o.numberf("max_length", s.maxLength, 0.0, 100.0);
+  s.angle0 = o.angle("angle0", degrees(s.angle0), 0.0, 90.0);
+  s.angleConversion = o.numberf("angle_conversion", s.angleConversion, 0.0, 1.0);
+  s.angleSensitivity = o.numberf("angle_sensitivity", s.angleSensitivity, 0.0, 1.0);
+  s.leafThicknessRate = o.numberf("leaf_thickness_rate", s.leafThicknessRate, 0.0, 1.0);
+  s.leafThicknessSensitivity = o.numberf("leaf_thickness_sensitivity", s.leafThicknessSensitivity, 0.0, 1.0);
+  s.leafRadiusSensitivity = o.numberf("leaf_radius_sensitivity", s.leafRadiusSensitivity, 0.0, 1.0);
+  s.petioleStrength = o.numberf("petiole_strength", s.petioleStrength, 0.0, 1e3);
+  s.bladeStrength = o.numberf("blade_strength", s.bladeStrength, 0.0, 1e3);
+  s.strengthToWind = o.numberf("strength_to_wind", s.strengthToWind, 0.0, 1e3);
+  s.petioleBendRate = o.angle("petiole_bend_rate", degrees(s.petioleBendRate), 0.0, 360.0);
+  s.bladeBendRate = o.angle("blade_bend_rate", degrees(s.bladeBendRate), 0.0, 360.0);
+  s.twistRate = o.angle("twist_rate", degrees(s.twistRate), 0.0, 360.0);
+  s.vibrateRate = o.angle("vibrate_rate", degrees(s.vibrateRate), 0.0, 360.0);
+  s.petioleBendLimit = o.angle("petiole_bend_limit", degrees(s.petioleBendLimit), 0.0, 90.0);
+  s.bladeBendLimit = o.angle("blade_bend_limit", degrees(s.bladeBendLimit), 0.0, 90.0);
+  s.twistLimit = o.angle("twist_limit", degrees(s.twistLimit), 0.0, 90.0);
+  s.vibrateLimit = o.angle("vibrate_limit", degrees(s.vibrateLimit), 0.0, 90.0);
+  s.youngModulus = o.numberf("young_modulus", s.youngModulus, 1e5, 1e12);
+  s.woodDensity = o.numberf("wood_density", s.woodDensity, 10.0, 5000.0);
+  s.dragCoefficient = o.numberf("drag_coefficient", s.dragCoefficient, 0.0, 10.0);
+  s.leafMass = o.numberf("leaf_mass", s.leafMass, 0.0, 10.0);
+  s.maxSwayAngle = o.angle("max_sway_angle", degrees(s.maxSwayAngle), 0.0, 90.0);
+  o.finish();
+  return s;
+}
+
+float windGrowthFactor(float w, float wMin, float wMax) {
+  // eq. 6
+  return std::min(1.0f, std::max(0.0f, (w - wMin) / (wMax - wMin)));
+}
+
+static double f(double w, const GrowthFlowSpecies& s) {
+  return std::min(1.0, std::max(0.0, (w - s.windMin) / (double(s.windMax) - s.windMin)));
+}
+
+double radiusAt(double r0, double t, double w, const GrowthFlowSpecies& s) {
+  double dr = 1.0 + s.radiusSensitivity * f(w, s);  // eq. 7
+  return r0 * std::pow(1.0 + s.radiusRate * dr, t);
+}
+
+double lengthAt(double l0, double t, double w, double gl, const GrowthFlowSpecies& s) {
+  double dl = 1.0 - s.lengthSensitivity * f(w, s);  // eq. 8
+  double l = l0 * std::pow(gl * dl, t);
+  return s.maxLength > 0.0f ? std::min(l, double(s.maxLength)) : l;  // Algorithm 1: l_t ≤ l_max
+}
+
+double angleAt(double t, double w, const GrowthFlowSpecies& s) {
+  double da = double(s.angleConversion) * s.angleSensitivity * f(w, s);  // eq. 9
+  return s.angle0 * std::pow(1.0 + da, t);
+}
+
+double leafThicknessAt(double h0, double t, double w, const GrowthFlowSpecies& s) {
+  double dh = 1.0 + s.leafThicknessSensitivity * f(w, s);  // eq. 16 (reconstructed, see header)
+  return h0 * std::pow(1.0 + s.leafThicknessRate * dh, t);
+}
+
+double leafRadiusAt(double d0, double t, double w, double gd, const GrowthFlowSpecies& s) {
+  double dd = 1.0 - s.leafRadiusSensitivity * f(w, s);  // eq. 17 (reconstructed, see header)
+  return d0 * std::pow(gd * dd, t);
+}
+
+GrowthFlowStep growthStep(float w, const GrowthFlowSpecies& s) {
+  GrowthFlowStep g;
+  g.f = windGrowthFactor(w, s.windMin, s.windMax);
+  if (!g.active()) return g;  // exactly the still-air growth
+  g.radius = (1.0f + s.radiusRate * (1.0f + s.radiusSensitivity * g.f)) / (1.0f + s.radiusRate);
+  g.length = 1.0f - s.lengthSensitivity * g.f;
+  g.leafThickness =
+      (1.0f + s.leafThicknessRate * (1.0f + s.leafThicknessSensitivity * g.f)) / (1.0f + s.leafThicknessRate);
+  g.leafRadius = 1.0f - s.leafRadiusSensitivity * g.f;
+  g.angleGrowth = s.angleConversion * s.angleSensitivity * g.f;
+  return g;
+}
+
+Vec3 turnTowardWind(const Vec3& direction, const Vec3& wind, const GrowthFlowStep& step, float& angle) {
+  if (!step.active() || step.angleGrowth <= 0.0f) return direction;
+  float speed = wind.norm();
+  if (speed <= 0.0f) return direction;
+  // eq. 9 step by step: α_t = α_{t−1} (1 + Δα); the shoot turns by the increase. A shoot
+  // cannot turn more than half a turn in all, which also keeps α finite.
+  float next = std::min(angle * (1.0f + step.angleGrowth), kPi);
+  float increase = next - angle;
+  angle = next;
+  Vec3 w = wind / speed;
+  Vec3 u = direction.cross(w);  // Algorithm 1: u = b × w
+  float s = u.norm();
+  if (s < 1e-6f) return direction;  // already along (or against) the wind
+  float toWind = std::atan2(s, direction.dot(w));  // §3.1.1: never past the wind direction
+  float turn = std::min(increase, toWind);
+  return (Eigen::AngleAxisf(turn, u / s) * direction).normalized();
+}
+
+bool leafDetaches(float w, const GrowthFlowSpecies& s) {
+  return w > s.strengthToWind * s.petioleStrength || w > s.strengthToWind * s.bladeStrength;
+}
+
+float bounceAngle(float angle, int8_t& sign, float w, float rate, float dt, float limit) {
+  // eq. 10 (12, 14): reverse before leaving [−limit, limit]; eq. 11 (13, 15): move.
+  float delta = w * rate * dt;
+  float next = angle + float(sign) * delta;
+  if (next > limit || next < -limit) sign = int8_t(-sign);
+  next = angle + float(sign) * delta;
+  // A step larger than the whole range (violent wind, long frame) would overshoot the other
+  // way too: stop at the limit instead.
+  return std::clamp(next, -limit, limit);
+}
+
+void updateLeafMotion(LeafMotionState& leaf, int type, float w, float gust, float dt, const GrowthFlowSpecies& s) {
+  if (leaf.detached) return;
+  if (leafDetaches(w, s)) {
+    leaf.detached = true;
+    return;
+  }
+  float ws = gust * w;  // l_s: the fraction of the wind felt this frame
+  switch (type) {
+    case 0:
+      if (s.petioleStrength <= s.bladeStrength)
+        leaf.petioleBend = bounceAngle(leaf.petioleBend, leaf.sPetiole, ws, s.petioleBendRate, dt, s.petioleBendLimit);
+      else
+        leaf.bladeBend = bounceAngle(leaf.bladeBend, leaf.sBlade, ws, s.bladeBendRate, dt, s.bladeBendLimit);
+      break;
+    case 1: leaf.twist = bounceAngle(leaf.twist, leaf.sTwist, ws, s.twistRate, dt, s.twistLimit); break;
+    default: leaf.vibrate = bounceAngle(leaf.vibrate, leaf.sVibrate, ws, s.vibrateRate, dt, s.vibrateLimit); break;
+  }
+}
+
+}  // namespace tendril::wind

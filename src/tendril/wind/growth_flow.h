@@ -1,0 +1,129 @@
+// Growth-Flow (seed 001): how wind changes the growth and the motion of branches and leaves.
+//
+// Growth (§3.1.2, §3.2.2). The wind growth factor f(w) ∈ [0, 1] (eq. 6) is 0 at or below the
+// species' w_min and 1 at or above w_max. Over t units of growth time in a wind of speed w:
+//   radius      r_t = r0 (1 + g_r Δr)^t,  Δr = 1 + s_r f(w)        (eq. 7)
+//   length      l_t = l0 (g_l Δl)^t,      Δl = 1 − s_l f(w)        (eq. 8, clamped to l_max)
+//   growth angle α_t = α0 (1 + Δα)^t,     Δα = c_α s_α f(w)        (eq. 9)
+//   leaf thickness h_t = h0 (1 + g_h Δh)^t,  Δh = 1 + s_h f(w)      (eq. 16)
+//   leaf radius    d_t = d0 (g_d Δd)^t,      Δd = 1 − s_d f(w)      (eq. 17)
+// Eq. 16–17 are garbled in the paper's text ("h_t = h0(1 + g_h w s_h)^t", "d_t = d0(g_d w
+// s_d)^t", the latter zero in still air although the text defines a proportional change Δd);
+// we reconstruct them in the form of eq. 7–8, through f(w), so that a wind at or below w_min
+// changes nothing, as §3.1.2 says of all growth.
+//
+// Growth models apply these as per-step factors *relative to their own still-air growth*
+// (GrowthFlowStep): an organ that grows t steps in a constant wind ends up exactly eq. 7/8/16/17
+// times the size it has in still air, whatever the model's own growth law is. Each model's
+// docs say what its unit of growth time is.
+//
+// Motion (§3.2.1). Leaves bend (at the petiole when t_p ≤ t_b, else at the blade), twist and
+// vibrate, one motion type per frame chosen at random; each angle follows the bounce rule of
+// eq. 10–15: it moves by s·w·c·Δt and reverses direction before it would leave its limits.
+// Leaves detach when the wind exceeds c_p t_p or c_b t_b (Algorithm 2).
+#pragma once
+
+#include "tendril/core/math.h"
+
+#include <cstdint>
+
+namespace tendril {
+class JsonObject;
+}
+
+namespace tendril::wind {
+
+struct GrowthFlowSpecies {
+  // eq. 6: wind speeds (m/s) where growth starts to respond, and responds fully.
+  float windMin = 4.0f;  // aspen responds above 4 m/s (seed 001 §2.2.2)
+  float windMax = 12.0f;
+  // eq. 7: normal radius growth rate g_r (per unit growth time) and the species' sensitivity.
+  float radiusRate = 0.01f;
+  float radiusSensitivity = 0.5f;  // s_r ∈ [0, 1]
+  // eq. 8: normal elongation factor g_l is the model's own (e.g. the climbing decrease ratio);
+  // s_l is the sensitivity, l_max the cap (m; 0 = the model's own maximum).
+  float lengthSensitivity = 0.3f;  // s_l ∈ [0, 1]
+  float maxLength = 0.0f;
+  // eq. 9: growth angle toward the wind. α0 is the angle a shoot turns toward the wind in its
+  // first unit of growth time at f = 1 when c_α s_α = 1; c_α converts m/s to degrees per second.
+  float angle0 = radians(0.5f);      // α0 (rad)
+  float angleConversion = 0.02f;     // c_α (per m/s, per unit growth time)
+  float angleSensitivity = 0.5f;     // s_α ∈ [0, 1]
+  // eq. 16–17: leaf thickness and leaf radius.
+  float leafThicknessRate = 0.01f;        // g_h
+  float leafThicknessSensitivity = 0.5f;  // s_h ∈ [0, 1]
+  float leafRadiusSensitivity = 0.3f;     // s_d ∈ [0, 1]
+  // Algorithm 2: a leaf detaches when w > c_p t_p or w > c_b t_b (t: tensile strengths).
+  float petioleStrength = 1.0f;    // t_p
+  float bladeStrength = 1.2f;      // t_b
+  float strengthToWind = 20.0f;    // c_p = c_b (m/s per unit of strength)
+  // eq. 10–15: angle rates per m/s (c_θ, c_β, c_ψ, c_φ, rad per (m/s · s)) and the paper's
+  // limits (§4): θ ±5°, β ±10°, ψ ±15°, φ ±5°.
+  float petioleBendRate = radians(4.0f);
+  float bladeBendRate = radians(6.0f);
+  float twistRate = radians(8.0f);
+  float vibrateRate = radians(10.0f);
+  float petioleBendLimit = radians(5.0f);
+  float bladeBendLimit = radians(10.0f);
+  float twistLimit = radians(15.0f);
+  float vibrateLimit = radians(5.0f);
+  // Branch sway (eq. 1): Young's modulus of the wood (Pa), density (kg/m³), drag coefficient;
+  // the mass of a branch is 10 times that of a leaf (§3.1.1).
+  float youngModulus = 2.0e8f;
+  float woodDensity = 700.0f;
+  float dragCoefficient = 1.2f;
+  float leafMass = 0.002f;  // kg per leaf for the drag it adds (branch mass = 10 × this per node)
+  float maxSwayAngle = radians(20.0f);  // per node, on top of the limit acos(b·w) of §3.1.1
+
+  // Reads the "growth_flow" object of a species file (every key optional; angles in degrees).
+  static GrowthFlowSpecies read(JsonObject& o);
+};
+
+// eq. 6.
+float windGrowthFactor(float windSpeed, float windMin, float windMax);
+// eq. 7–9, 16–17 in closed form, for t units of growth time in a constant wind of speed w.
+// gl and gd are the model's normal elongation and leaf-radius factors.
+double radiusAt(double r0, double t, double w, const GrowthFlowSpecies& s);
+double lengthAt(double l0, double t, double w, double gl, const GrowthFlowSpecies& s);
+double angleAt(double t, double w, const GrowthFlowSpecies& s);
+double leafThicknessAt(double h0, double t, double w, const GrowthFlowSpecies& s);
+double leafRadiusAt(double d0, double t, double w, double gd, const GrowthFlowSpecies& s);
+
+// One unit of growth time in a wind w: the factors a model multiplies into its still-air
+// growth. All are exactly 1 (and the angle step 0) when f(w) = 0, so wind at or below w_min
+// leaves every result bit-identical.
+struct GrowthFlowStep {
+  float f = 0.0f;              // eq. 6
+  float radius = 1.0f;         // (1 + g_r Δr) / (1 + g_r): eq. 7 relative to still air
+  float length = 1.0f;         // Δl: eq. 8 relative to still air
+  float leafThickness = 1.0f;  // (1 + g_h Δh) / (1 + g_h): eq. 16 relative to still air
+  float leafRadius = 1.0f;     // Δd: eq. 17 relative to still air
+  float angleGrowth = 0.0f;    // Δα: eq. 9's growth rate of the accumulated angle
+  bool active() const { return f > 0.0f; }
+};
+GrowthFlowStep growthStep(float windSpeed, const GrowthFlowSpecies& s);
+
+// Algorithm 1's last step for a growing tip: `angle` is its accumulated growth angle α (start
+// it at angle0); it grows by eq. 9 and the tip direction turns by the increase about
+// u = b × w, never past the wind direction. Returns the new unit direction.
+Vec3 turnTowardWind(const Vec3& direction, const Vec3& wind, const GrowthFlowStep& step, float& angle);
+
+// Algorithm 2's detachment test.
+bool leafDetaches(float windSpeed, const GrowthFlowSpecies& s);
+
+// eq. 10–15: one angle with its direction of motion. Returns the new angle; flips `sign`
+// before the angle would leave [−limit, limit].
+float bounceAngle(float angle, int8_t& sign, float windSpeed, float rate, float dt, float limit);
+
+// A leaf's motion state (Algorithm 2): the four angles and their directions.
+struct LeafMotionState {
+  float petioleBend = 0, bladeBend = 0, twist = 0, vibrate = 0;  // θ, β, ψ, φ (rad)
+  int8_t sPetiole = 1, sBlade = 1, sTwist = 1, sVibrate = 1;
+  bool detached = false;
+};
+// One frame of Algorithm 2's motion: `motionType` ∈ {0, 1, 2} (bend, twist, vibrate), `gust`
+// ∈ [0, 1] is l_s, the fraction of the wind that reaches the leaf this frame.
+void updateLeafMotion(LeafMotionState& leaf, int motionType, float windSpeed, float gust, float dt,
+                      const GrowthFlowSpecies& s);
+
+}  // namespace tendril::wind

@@ -1,0 +1,91 @@
+// Growth-Flow motion (seed 001 §3.1.1, §3.2.1) for any PlantModel: branches sway about their
+// node centres, leaves bend, twist and vibrate, and leaves tear off in a wind above their
+// strength. Works on every model's output (climbing, L-system, graph, particle snapshots).
+//
+// Branch sway. For node i (a segment from p_i along b_i, b the vector from the node to the
+// segment's centre of gravity) eq. 1 gives the torque N = (F_w + K + R + T_r) × b: F_w is the
+// wind's drag on the segment and its leaves (½ ρ C_d A |w⊥| w⊥), T_r the force its child
+// branches pass back (their F_w + T_r), and the resistivity K and axial damping R are the
+// reaction of the wood. We treat K as the rotational spring of the segment, k = E π r⁴ / (4 l)
+// (a beam of Young's modulus E), so the torque of the wind balances it at θ* = |(F_w + T_r) × b|
+// / k; the angle is bounded by the angle to the wind, acos(b̂·ŵ) (§3.1.1), and by the
+// species' maxSwayAngle. The branch sways toward the wind and back with a sinusoidal ease-in
+// and ease-out (§3.1.1: θ = θ* (1 − cos φ) / 2), about the axis b × w, with the period of the
+// segment's spring and inertia (2π √(I / k), I = m l² / 3 with m its own and its children's
+// mass); nodes of one branch chain share phase and period so a branch moves as one, and R
+// shows as the ease-out. Nodes growing on a support (kNodeClimbing, kNodeAnchored) are held by
+// it and do not sway; their free children do. The gust fraction scales the whole torque.
+//
+// Leaves. Each frame every leaf gets one random motion type (1/3 each, §4) and a gust fraction
+// l_s ∈ [gustMin, 1]; eq. 10–15 move its angles (growth_flow.h). A leaf's posed rotation is
+// its rest rotation · R_Y(ψ) · R_X(θ + φ) (twist about the petiole, petiole bend and vibration
+// about the blade's width axis at the petiole); the blade bend β goes to leafMotion.x, where
+// the leaf mesh curls the blade, and leafMotion = (β, ψ, φ). Detached leaves are left out of
+// the posed plant from then on.
+//
+// Results depend only on the rest plant, the wind, the seed and the frame number: random
+// choices are keyed by (seed, leaf, frame).
+#pragma once
+
+#include "tendril/env/wind_field.h"
+#include "tendril/plant/plant_model.h"
+#include "tendril/wind/growth_flow.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace tendril::wind {
+
+struct MotionSettings {
+  float airDensity = 1.25f;  // kg/m³
+  float gustMin = 0.3f;      // a leaf feels between gustMin and all of the wind each frame
+  // > 0: sway repeats exactly after this many seconds (periods rounded to divide it, gusts
+  // periodic); for looping animation clips.
+  float loopSeconds = 0.0f;
+  uint64_t seed = 1;
+};
+
+class WindMotion {
+ public:
+  WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& species, MotionSettings settings = {});
+
+  // Advances one frame to time t (s) with frame length dt and writes the posed plant (the rest
+  // plant with swayed nodes and moved leaves; detached leaves left out).
+  void step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed);
+
+  // The sway angle of every node in the last step (rad) and its world axis.
+  const std::vector<float>& swayAngles() const { return angle_; }
+  const std::vector<LeafMotionState>& leaves() const { return leaves_; }
+  uint32_t frame() const { return frame_; }
+  const plant::PlantModel& rest() const { return rest_; }
+  // Posed rigid transform of every node's subtree in the last step: x ↦ rotation·x + translation.
+  const std::vector<Quat>& nodeRotation() const { return Q_; }
+  const std::vector<Vec3>& nodeTranslation() const { return T_; }
+
+ private:
+  void computeSway(float t, const env::WindField& wind);
+
+  plant::PlantModel rest_;
+  GrowthFlowSpecies species_;
+  MotionSettings settings_;
+  uint32_t frame_ = 0;
+
+  // Per node, from the rest pose.
+  std::vector<float> stiffness_;   // k (N·m/rad)
+  std::vector<float> area_;        // projected branch area + leaf area (m²)
+  std::vector<float> period_;      // s, shared by a chain
+  std::vector<float> phase_;       // rad, shared by a chain
+  std::vector<uint8_t> held_;      // grows on a support: does not sway
+  std::vector<Vec3> centre_;       // centre of gravity of the segment (world, rest)
+  // Per node, per step.
+  std::vector<Vec3> force_;        // F_w + T_r
+  std::vector<float> angle_;
+  std::vector<Vec3> axis_;
+  std::vector<Quat> Q_;
+  std::vector<Vec3> T_;
+  // Per leaf.
+  std::vector<LeafMotionState> leaves_;
+  std::vector<float> leafArea_;
+};
+
+}  // namespace tendril::wind

@@ -1,0 +1,226 @@
+// Growth-Flow motion on PlantModels, the wind field and the looping glTF wind animation.
+#include "tendril/core/error.h"
+#include "tendril/env/wind_field.h"
+#include "tendril/io/gltf_animation.h"
+#include "tendril/wind/motion.h"
+
+#include "support/gltf_validator.h"
+#include "support/synthetic_plants.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+
+namespace tendril::wind {
+namespace {
+
+plant::PlantModel leafyTree() {
+  plant::PlantModel p = meshtest::branchingTree();
+  meshtest::addLeaves(p, 2);
+  return p;
+}
+
+env::WindField constantWind(Vec3 v) {
+  env::WindSettings s;
+  s.velocity = v;
+  return env::WindField(s);
+}
+
+TEST(WindField, ConstantGustyAndEmitterWinds) {
+  env::WindField calm;
+  EXPECT_EQ(calm.sample(Vec3(1, 2, 3), 5.0f), Vec3::Zero());
+  EXPECT_TRUE(calm.settings().calm());
+
+  env::WindField steady = constantWind(Vec3(6, 0, 0));
+  EXPECT_EQ(steady.sample(Vec3(-40, 3, 9), 123.0f), Vec3(6, 0, 0));
+
+  env::WindSettings g;
+  g.mode = env::WindMode::Gusty;
+  g.velocity = Vec3(8, 0, 0);
+  g.gustStrength = 0.5f;
+  g.seed = 7;
+  env::WindField gusty(g);
+  double mean = 0, lo = 1e9, hi = 0;
+  const int n = 4000;
+  for (int i = 0; i < n; ++i) {
+    Vec3 w = gusty.sample(Vec3(0, 1, 0), 0.05f * float(i));
+    ASSERT_TRUE(std::isfinite(w.x()));
+    double s = w.norm();
+    mean += s / n;
+    lo = std::min(lo, s);
+    hi = std::max(hi, s);
+    EXPECT_GT(w.x(), 0.0f);  // wanders by at most gustTurn about +Y
+  }
+  EXPECT_NEAR(mean, 8.0, 1.2);       // gusts vary about the prevailing speed
+  EXPECT_GT(hi - lo, 4.0);           // ±50 % is a range of 8 m/s
+  EXPECT_LE(hi, 8.0 * 1.5 + 1e-3);
+  // Smooth in time, and gusts travel downwind: what blows at x = 0 at t blows at x = 8 at t + 1.
+  EXPECT_LT((gusty.sample(Vec3(0, 1, 0), 10.0f) - gusty.sample(Vec3(0, 1, 0), 10.01f)).norm(), 0.2f);
+  EXPECT_NEAR((gusty.sample(Vec3(0, 1, 0), 10.0f) - gusty.sample(Vec3(8, 1, 0), 11.0f)).norm(), 0.0f, 1e-4f);
+
+  env::WindSettings e;
+  env::WindEmitter jet;
+  jet.position = Vec3(0, 1, 0);
+  jet.direction = Vec3::UnitZ();
+  jet.speed = 10.0f;
+  jet.radius = 0.5f;
+  jet.reach = 5.0f;
+  e.emitters.push_back(jet);
+  env::WindField emitter(e);
+  EXPECT_NEAR(emitter.sample(Vec3(0, 1, 0.01f), 0).z(), 10.0f, 0.1f);   // at the nozzle
+  Vec3 far = emitter.sample(Vec3(0, 1, 3), 0);
+  EXPECT_GT(far.z(), 0.0f);
+  EXPECT_LT(far.z(), 10.0f);                                            // widened and slowed
+  EXPECT_EQ(emitter.sample(Vec3(0, 1, -1), 0), Vec3::Zero());           // behind it
+  EXPECT_EQ(emitter.sample(Vec3(3, 1, 1), 0), Vec3::Zero());            // beside it
+  EXPECT_EQ(emitter.sample(Vec3(0, 1, 6), 0), Vec3::Zero());            // past its reach
+}
+
+TEST(WindMotion, BranchesSwayTowardTheWindAndBack) {
+  plant::PlantModel rest = leafyTree();
+  GrowthFlowSpecies species;
+  species.youngModulus = 2e6f;  // soft enough to reach the sway limit in this wind
+  WindMotion motion(rest, species);
+  env::WindField wind = constantWind(Vec3(10, 0, 0));
+  plant::PlantModel posed;
+  double maxLean = 0, minLean = 1e9;
+  for (int f = 0; f < 400; ++f) {
+    motion.step(0.025f * float(f), 0.025f, wind, posed);
+    plant::validate(posed, "posed");
+    // Node 5 (top of the stem): how far its tip moved downwind.
+    float lean = posed.tip(5).x() - rest.tip(5).x();
+    maxLean = std::max(maxLean, double(lean));
+    minLean = std::min(minLean, double(lean));
+    for (size_t i = 0; i < posed.nodeCount(); ++i) {
+      ASSERT_LE(motion.swayAngles()[i], species.maxSwayAngle + 1e-6f);
+      ASSERT_NEAR(posed.length[i], rest.length[i], 0.0f);
+    }
+    // The stem stays connected: each chain node starts where its parent ends.
+    for (int i = 1; i < 6; ++i) ASSERT_LT((posed.position[size_t(i)] - posed.tip(size_t(i - 1))).norm(), 1e-5f);
+  }
+  EXPECT_GT(maxLean, 0.05);   // the top leans downwind...
+  EXPECT_LT(minLean, 0.005);  // ...and comes back (sinusoidal ease-in / ease-out)
+  EXPECT_GE(minLean, -1e-4);  // never upwind
+}
+
+TEST(WindMotion, StillAirAndSupportedNodesDoNotMove) {
+  plant::PlantModel rest = leafyTree();
+  for (uint32_t& f : rest.flags) f |= plant::kNodeClimbing;  // all held by a wall
+  WindMotion held(rest, GrowthFlowSpecies{});
+  plant::PlantModel posed;
+  held.step(1.0f, 0.04f, constantWind(Vec3(15, 0, 0)), posed);
+  for (size_t i = 0; i < rest.nodeCount(); ++i) EXPECT_EQ(posed.position[i], rest.position[i]);
+
+  plant::PlantModel free = leafyTree();
+  WindMotion still(free, GrowthFlowSpecies{});
+  still.step(1.0f, 0.04f, env::WindField{}, posed);
+  for (size_t i = 0; i < free.nodeCount(); ++i) EXPECT_EQ(posed.position[i], free.position[i]);
+  for (size_t j = 0; j < free.leafCount(); ++j) EXPECT_EQ(posed.leafMotion[j], Vec3::Zero());
+}
+
+TEST(WindMotion, LeafAnglesStayInTheirLimitsAndLeavesTearOffInAStorm) {
+  plant::PlantModel rest = leafyTree();
+  GrowthFlowSpecies s;  // petiole holds up to c_p t_p = 20 m/s
+  WindMotion motion(rest, s);
+  plant::PlantModel posed;
+  env::WindField breeze = constantWind(Vec3(12, 0, 0));
+  for (int f = 0; f < 2000; ++f) {
+    motion.step(0.04f * float(f), 0.04f, breeze, posed);
+    ASSERT_EQ(posed.leafCount(), rest.leafCount());
+    for (const LeafMotionState& L : motion.leaves()) {
+      ASSERT_LE(std::fabs(L.petioleBend), radians(5.0f) + 1e-6f);
+      ASSERT_LE(std::fabs(L.bladeBend), radians(10.0f) + 1e-6f);
+      ASSERT_LE(std::fabs(L.twist), radians(15.0f) + 1e-6f);
+      ASSERT_LE(std::fabs(L.vibrate), radians(5.0f) + 1e-6f);
+    }
+  }
+  size_t moving = 0;
+  for (const LeafMotionState& L : motion.leaves()) moving += (L.twist != 0.0f || L.vibrate != 0.0f);
+  EXPECT_EQ(moving, rest.leafCount());
+  motion.step(100.0f, 0.04f, constantWind(Vec3(25, 0, 0)), posed);
+  EXPECT_EQ(posed.leafCount(), 0u);  // 25 m/s > 20 m/s: every leaf has detached
+  motion.step(100.04f, 0.04f, breeze, posed);
+  EXPECT_EQ(posed.leafCount(), 0u);  // and they stay gone
+}
+
+TEST(WindMotion, SameForAnyThreadCount) {
+  plant::PlantModel rest = meshtest::syntheticIvy(3000, 3);
+  for (uint32_t& f : rest.flags) f &= ~uint32_t(plant::kNodeClimbing);
+  env::WindSettings g;
+  g.mode = env::WindMode::Gusty;
+  g.velocity = Vec3(9, 0, 2);
+  uint64_t hashes[2];
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+    WindMotion motion(rest, GrowthFlowSpecies{});
+    plant::PlantModel posed;
+    for (int f = 0; f < 30; ++f) motion.step(0.04f * float(f), 0.04f, env::WindField(g), posed);
+    hashes[threads - 1] = plant::contentHash(posed);
+  }
+  EXPECT_EQ(hashes[0], hashes[1]);
+}
+
+TEST(WindAnimation, JointsAreBoundedAndCoverTheRoots) {
+  plant::PlantModel p = meshtest::syntheticIvy(5000, 2);
+  for (int maxJoints : {8, 32, 128}) {
+    std::vector<int32_t> joints = io::chooseJoints(p, maxJoints);
+    EXPECT_LE(joints.size(), size_t(maxJoints));
+    EXPECT_EQ(joints.front(), 0);
+    EXPECT_TRUE(std::is_sorted(joints.begin(), joints.end()));
+  }
+}
+
+TEST(WindAnimation, LoopingClipPassesTheValidatorAndRepeats) {
+  plant::PlantModel tree = leafyTree();
+  plant::PlantModel ivy = meshtest::syntheticIvy(1500, 5);
+  for (uint32_t& f : ivy.flags) f &= ~uint32_t(plant::kNodeClimbing);
+  ivy.name = "ivy";
+  GrowthFlowSpecies soft;
+  soft.youngModulus = 2e6f;
+  env::WindSettings g;
+  g.mode = env::WindMode::Gusty;
+  g.velocity = Vec3(8, 0, 0);
+  std::filesystem::path file = meshtest::exportTestDir() / "wind.glb";
+  io::WindAnimationOptions o;
+  o.seconds = 2.0f;
+  o.fps = 12;
+  o.maxJoints = 24;
+  io::WindAnimationStats stats =
+      io::writeWindAnimationGlb({{&tree, soft}, {&ivy, soft}}, env::WindField(g), o, file);
+  EXPECT_EQ(stats.keyframes, 25u);
+  EXPECT_LE(stats.joints, 48u);
+  EXPECT_GT(stats.bytes, 1000u);
+  meshtest::GltfValidation v = meshtest::validateGltf(file);
+  EXPECT_EQ(v.exitCode, 0) << v.output;
+  EXPECT_EQ(v.errors, 0) << v.output;
+
+  // The sway itself loops: frame 0 and frame 24 (t = 2 s) pose the plant identically.
+  MotionSettings ms;
+  ms.loopSeconds = 2.0f;
+  WindMotion motion(tree, soft, ms);
+  plant::PlantModel a, b;
+  motion.step(0.0f, 0.1f, env::WindField(g), a);
+  motion.step(2.0f, 0.1f, env::WindField(g), b);
+  for (size_t i = 0; i < a.nodeCount(); ++i) EXPECT_LT((a.position[i] - b.position[i]).norm(), 1e-5f);
+  plant::PlantModel c;
+  motion.step(0.7f, 0.1f, env::WindField(g), c);
+  double moved = 0;
+  for (size_t i = 0; i < a.nodeCount(); ++i) moved = std::max(moved, double((a.tip(i) - c.tip(i)).norm()));
+  EXPECT_GT(moved, 0.005);  // and it does move in between
+}
+
+TEST(WindAnimation, BadOptionsAreAnError) {
+  plant::PlantModel tree = leafyTree();
+  io::WindAnimationOptions o;
+  o.seconds = 0.0f;
+  std::vector<io::AnimatedPlant> plants{{&tree, GrowthFlowSpecies{}}};
+  auto write = [&] { io::writeWindAnimationGlb(plants, env::WindField{}, o, meshtest::exportTestDir() / "x.glb"); };
+  EXPECT_THROW(write(), tendril::Error);
+  o.seconds = 1.0f;
+  o.fps = 0;
+  EXPECT_THROW(write(), tendril::Error);
+}
+
+}  // namespace
+}  // namespace tendril::wind
