@@ -1,0 +1,890 @@
+// SPH air, two-way coupled with particle plants (seed 000 §5.3). See sph.h and docs/sph.md.
+//
+// Seed 000's extraction garbles eq. 11–13; they are reconstructed here from the text around
+// them and from Müller, Charypar & Gross 2003 (MCG03), whose forces the seed says it uses:
+//   eq. 11  a_i = dv_i/dt = (−∇p + μ∇²v)_i / ρ_i
+//   eq. 12  A(x) = Σ_j V_j A_j W(η),  V_j = m_j/ρ_j,  η = (x − x_j)/h
+//   eq. 13  η = G (x − x_j)  for an ellipsoidal particle j (Owen et al. 1997's tensor G)
+// with MCG03's kernels (eq. 20–22 there), written for η = r/h:
+//   W_poly6 = 315/(64π h³) (1 − |η|²)³            density
+//   ∇W_spiky = −45/(π h⁴) (1 − |η|)² η̂           pressure (MCG03 eq. 10, symmetrised)
+//   ∇²W_visc = 45/(π h⁵) (1 − |η|)               viscosity (MCG03 eq. 14)
+// and MCG03's equation of state p = k (ρ − ρ0) with k = c², clamped at 0 (no tension).
+#include "tendril/wind/sph.h"
+
+#include "tendril/core/error.h"
+#include "tendril/core/log.h"
+#include "tendril/core/parallel.h"
+#include "tendril/core/timer.h"
+#include "tendril/env/environment.h"
+#include "tendril/particles/world.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace tendril::wind {
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr uint32_t kDead = std::numeric_limits<uint32_t>::max();
+constexpr size_t kMaxCells = size_t(1) << 25;  // uniform-grid cells (128 MiB of cell starts)
+constexpr size_t kGrain = 256;
+
+// Unit-support kernel constants (multiply by 1/h³, 1/h⁴, 1/h⁵ as noted above).
+constexpr float kPoly6 = 315.0f / (64.0f * kPi);
+constexpr float kSpiky = 45.0f / kPi;
+constexpr float kVisc = 45.0f / kPi;
+
+// The SDF sampled by trilinear interpolation may change faster than the true distance
+// (up to √3 along a cell diagonal): a particle's known distance bound shrinks by this much
+// per metre moved.
+constexpr float kSdfLipschitz = 1.75f;
+
+Error settingError(const char* key, const std::string& message) { return Error("SPH settings", key, message); }
+
+void checkFinite(const char* key, float v) {
+  if (!std::isfinite(v)) throw settingError(key, fmt::format("must be a finite number, got {}", v));
+}
+
+void checkRange(const char* key, float v, float lo, float hi, const char* unit) {
+  checkFinite(key, v);
+  if (!(v >= lo && v <= hi)) throw settingError(key, fmt::format("must be in [{}, {}] {}, got {}", lo, hi, unit, v));
+}
+
+}  // namespace
+
+// A uniform grid of cells of edge h over the domain, rebuilt by counting sort after every
+// substep, and the particles' state copied into grid order (structure of arrays), so that a
+// particle's neighbours lie in nine contiguous runs (three x-adjacent cells each).
+struct SphAir::Grid {
+  Vec3 origin = Vec3::Zero();
+  float inv = 1.0f;  // 1 / cell edge
+  Eigen::Vector3i dims = Eigen::Vector3i::Ones();
+  std::vector<uint32_t> cellOf;  // per particle (kDead: not in the grid)
+  std::vector<uint32_t> start;   // per cell + 1
+  std::vector<uint32_t> order;   // grid index → particle index
+  // Grid-ordered copies.
+  std::vector<float> px, py, pz, vx, vy, vz, rho, pressure, sdf;
+  std::vector<Vec3> sdfNormal;
+  // Grid-ordered results of a substep.
+  std::vector<Vec3> acc, dragAcc;
+  std::vector<float> dragRate;  // Σ φ k / m (1/s): the implicit factor of the drag
+
+  size_t size() const { return order.size(); }
+  Eigen::Vector3i cellCoord(const Vec3& p) const {
+    Eigen::Vector3i c;
+    for (int k = 0; k < 3; ++k) c[k] = std::clamp(int(std::floor((p[k] - origin[k]) * inv)), 0, dims[k] - 1);
+    return c;
+  }
+  uint32_t cellIndex(int x, int y, int z) const { return uint32_t((size_t(z) * dims.y() + y) * dims.x() + x); }
+  // Calls f(begin, end) for the grid-index runs of the cells within `reach` cells of c.
+  template <class F>
+  void forRuns(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, F&& f) const {
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y) {
+        const uint32_t b = start[cellIndex(lo.x(), y, z)], e = start[cellIndex(hi.x(), y, z) + 1];
+        if (b < e) f(b, e);
+      }
+  }
+  template <class F>
+  void forNeighbourRuns(const Vec3& p, F&& f) const {
+    const Eigen::Vector3i c = cellCoord(p);
+    const Eigen::Vector3i lo = (c.array() - 1).max(0).matrix();
+    const Eigen::Vector3i hi = (c.array() + 1).min(dims.array() - 1).matrix();
+    forRuns(lo, hi, f);
+  }
+};
+
+// Grown branch particles of the plants that can reach the air, in the order of their own
+// grid (cell edge = the largest support reach), with what the coupling needs.
+struct SphAir::Plants {
+  std::vector<uint32_t> slot;  // particle id in the ParticleWorld
+  std::vector<Vec3> x, axis, v;
+  std::vector<float> invA2, invB2;  // 1/α², 1/β²: the support ellipsoid's semi-axes (eq. 13)
+  std::vector<float> detG;          // det G = 1/(α β²)
+  std::vector<float> volume;        // Ψ = 4/3 π a b² (m³)
+  std::vector<float> dragK;         // k = ½ ρ C_d A |u⊥| (kg/s), fixed over a frame
+  std::vector<float> invZ;          // 1 / max(Σ V W, ½), fixed over a frame
+  std::vector<float> reach;         // α, the largest semi-axis
+  Vec3 origin = Vec3::Zero();
+  float inv = 1.0f;
+  Eigen::Vector3i dims = Eigen::Vector3i::Ones();
+  std::vector<uint32_t> start;
+
+  size_t size() const { return slot.size(); }
+  void clear() {
+    slot.clear(), x.clear(), axis.clear(), v.clear(), invA2.clear(), invB2.clear(), detG.clear();
+    volume.clear(), dragK.clear(), invZ.clear(), reach.clear(), start.clear();
+  }
+  Eigen::Vector3i cellCoord(const Vec3& p) const {
+    Eigen::Vector3i c;
+    for (int k = 0; k < 3; ++k) c[k] = std::clamp(int(std::floor((p[k] - origin[k]) * inv)), 0, dims[k] - 1);
+    return c;
+  }
+  uint32_t cellIndex(int x, int y, int z) const { return uint32_t((size_t(z) * dims.y() + y) * dims.x() + x); }
+  // Calls f(j) for the plant particles in the 27 cells around p (candidates; test the kernel).
+  template <class F>
+  void forCandidates(const Vec3& p, F&& f) const {
+    if (slot.empty()) return;
+    const Eigen::Vector3i c = cellCoord(p);
+    const Eigen::Vector3i lo = (c.array() - 1).max(0).matrix();
+    const Eigen::Vector3i hi = (c.array() + 1).min(dims.array() - 1).matrix();
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (uint32_t j = start[cellIndex(lo.x(), y, z)], e = start[cellIndex(hi.x(), y, z) + 1]; j < e; ++j) f(j);
+  }
+  // η² = |G(x − x_j)|² for the ellipsoid of j (eq. 13), with u = x − x_j.
+  float eta2(uint32_t j, const Vec3& u, float* along) const {
+    const float a = u.dot(axis[j]);
+    *along = a;
+    return a * a * invA2[j] + (u.squaredNorm() - a * a) * invB2[j];
+  }
+  // ∇_x W_spiky(G(x − x_j)) = det G · (−45/π)(1 − |η|)² Gᵀη/|η|, with Gᵀη = G²u.
+  Vec3 spikyGradient(uint32_t j, const Vec3& u, float along, float e2) const {
+    const float eta = std::sqrt(e2);
+    if (!(eta > 1e-6f)) return Vec3::Zero();
+    const Vec3 g2u = along * invA2[j] * axis[j] + invB2[j] * (u - along * axis[j]);
+    const float t = 1.0f - eta;
+    return (-kSpiky * detG[j] * t * t / eta) * g2u;
+  }
+  float poly6(uint32_t j, float e2) const {
+    const float t = 1.0f - e2;
+    return kPoly6 * detG[j] * t * t * t;
+  }
+};
+
+// Walls as mirrored rest lattices: a wall at distance d adds to a particle's density what the
+// fluid's own lattice would add if it continued past the wall (ρ_w(d)), and pushes it by the
+// pressure those mirror particles would exert (MCG03's symmetric pressure force with the
+// particle's own pressure on both sides: a = −p/(ρ0 ρ) · g_w(d) n). Tabulated over d ∈ [0, h]
+// from the same lattice the particle mass is calibrated on, so a lattice of rest spacing next
+// to a flat wall has exactly the rest density.
+struct SphAir::Walls {
+  static constexpr int kSamples = 512;
+  float h = 1, step = 1;
+  std::vector<float> density, gradient;  // ρ_w(d) (kg/m³), g_w(d) = n·m Σ ∇W_spiky (kg/m⁴, < 0)
+
+  float lookup(const std::vector<float>& t, float d) const {
+    if (!(d < h)) return 0.0f;
+    const float f = std::max(d, 0.0f) / step;
+    const int i = std::min(int(f), kSamples - 2);
+    const float w = f - float(i);
+    return t[i] + w * (t[i + 1] - t[i]);
+  }
+
+  // Where two closed faces meet (the box's edges) both mirrored lattices hold the quadrant
+  // beyond both faces: it is subtracted once (inclusion–exclusion; the octant beyond three
+  // faces, under 0.5% of ρ0 at h = 2s, is left out). Tabulated over (d1, d2) ∈ [0, h]².
+  static constexpr int kEdgeSamples = 64;
+  float edgeStep = 1;
+  std::vector<float> edgeDensity, edgeGradient;  // ρ_q(d1, d2); n1 · m Σ ∇W_spiky (n2 part: swap)
+
+  float edgeLookup(const std::vector<float>& t, float d1, float d2) const {
+    if (!(d1 < h) || !(d2 < h)) return 0.0f;
+    const float f1 = std::max(d1, 0.0f) / edgeStep, f2 = std::max(d2, 0.0f) / edgeStep;
+    const int i = std::min(int(f1), kEdgeSamples - 2), j = std::min(int(f2), kEdgeSamples - 2);
+    const float u = f1 - float(i), v = f2 - float(j);
+    auto at = [&](int a, int b) { return t[size_t(a) * kEdgeSamples + b]; };
+    return (1 - u) * ((1 - v) * at(i, j) + v * at(i, j + 1)) + u * ((1 - v) * at(i + 1, j) + v * at(i + 1, j + 1));
+  }
+};
+
+namespace {
+
+// The mirrored lattices of the domain box's six faces at the distances lo = p − min and
+// hi = max − p, the quadrants beyond two faces counted once (inclusion–exclusion).
+template <class Walls>
+float boxGhostDensity(const Walls& W, const Vec3& lo, const Vec3& hi) {
+  float rho = 0.0f;
+  for (int a = 0; a < 3; ++a) {
+    if (!(lo[a] < W.h) && !(hi[a] < W.h)) continue;
+    rho += W.lookup(W.density, lo[a]) + W.lookup(W.density, hi[a]);
+    for (int b = a + 1; b < 3; ++b)
+      rho -= W.edgeLookup(W.edgeDensity, lo[a], lo[b]) + W.edgeLookup(W.edgeDensity, lo[a], hi[b]) +
+             W.edgeLookup(W.edgeDensity, hi[a], lo[b]) + W.edgeLookup(W.edgeDensity, hi[a], hi[b]);
+  }
+  return rho;
+}
+
+// Their g_w(d) n summed (the quadrants' share subtracted along each face's normal).
+template <class Walls>
+Vec3 boxGhostGradient(const Walls& W, const Vec3& lo, const Vec3& hi) {
+  Vec3 g = Vec3::Zero();
+  for (int c = 0; c < 3; ++c) {
+    if (!(lo[c] < W.h) && !(hi[c] < W.h)) continue;
+    g[c] += W.lookup(W.gradient, lo[c]) - W.lookup(W.gradient, hi[c]);
+    for (int e = 0; e < 3; ++e)
+      if (e != c)
+        g[c] -= W.edgeLookup(W.edgeGradient, lo[c], lo[e]) + W.edgeLookup(W.edgeGradient, lo[c], hi[e]) -
+                W.edgeLookup(W.edgeGradient, hi[c], lo[e]) - W.edgeLookup(W.edgeGradient, hi[c], hi[e]);
+  }
+  return g;
+}
+
+}  // namespace
+
+SphAir::SphAir(const SphSettings& settings) : settings_(settings) {
+  validate();
+  const float s = settings_.spacing;
+  h_ = settings_.supportFactor * s;
+  grid_ = std::make_unique<Grid>();
+  plants_ = std::make_unique<Plants>();
+  walls_ = std::make_unique<Walls>();
+
+  // Particle mass: the rest density on an infinite cubic lattice of spacing s (the lattice
+  // sum of W_poly6, self included, times m is ρ0).
+  const int reach = int(std::ceil(h_ / s));
+  const float invH2 = 1.0f / (h_ * h_), norm6 = kPoly6 / (h_ * h_ * h_);
+  double lattice = 0.0;
+  for (int z = -reach; z <= reach; ++z)
+    for (int y = -reach; y <= reach; ++y)
+      for (int x = -reach; x <= reach; ++x) {
+        const float q = float(x * x + y * y + z * z) * s * s * invH2;
+        if (q < 1.0f) lattice += std::pow(1.0 - q, 3.0);
+      }
+  mass_ = float(settings_.restDensity / (norm6 * lattice));
+
+  // Wall tables: mirror layers at −(s/2 + k s) behind a wall at 0, the particle at d.
+  Walls& w = *walls_;
+  w.h = h_;
+  w.step = h_ / float(Walls::kSamples - 1);
+  w.density.assign(Walls::kSamples, 0.0f);
+  w.gradient.assign(Walls::kSamples, 0.0f);
+  const double gradNorm = kSpiky / (double(h_) * h_ * h_ * h_);
+  for (int t = 0; t < Walls::kSamples; ++t) {
+    const double d = double(t) * w.step;
+    double rho = 0.0, grad = 0.0;
+    for (int k = 0; (d + s * (0.5 + k)) < h_; ++k) {
+      const double dz = d + s * (0.5 + k);
+      for (int y = -reach; y <= reach; ++y)
+        for (int x = -reach; x <= reach; ++x) {
+          const double r = std::sqrt(double(x * x + y * y) * s * s + dz * dz);
+          if (r >= h_) continue;
+          const double q = r * r / (double(h_) * h_);
+          rho += std::pow(1.0 - q, 3.0) * norm6;
+          const double e = 1.0 - r / h_;
+          grad -= gradNorm * e * e * dz / r;  // n · ∇W_spiky, n pointing from the wall to the particle
+        }
+    }
+    w.density[t] = float(mass_ * rho);
+    w.gradient[t] = float(mass_ * grad);
+  }
+  w.edgeStep = h_ / float(Walls::kEdgeSamples - 1);
+  w.edgeDensity.assign(size_t(Walls::kEdgeSamples) * Walls::kEdgeSamples, 0.0f);
+  w.edgeGradient.assign(size_t(Walls::kEdgeSamples) * Walls::kEdgeSamples, 0.0f);
+  for (int t1 = 0; t1 < Walls::kEdgeSamples; ++t1)
+    for (int t2 = 0; t2 < Walls::kEdgeSamples; ++t2) {
+      const double d1 = double(t1) * w.edgeStep, d2 = double(t2) * w.edgeStep;
+      double rho = 0.0, grad = 0.0;
+      for (int k1 = 0; (d1 + s * (0.5 + k1)) < h_; ++k1)
+        for (int k2 = 0; (d2 + s * (0.5 + k2)) < h_; ++k2) {
+          const double a = d1 + s * (0.5 + k1), b = d2 + s * (0.5 + k2);
+          for (int x = -reach; x <= reach; ++x) {
+            const double r = std::sqrt(a * a + b * b + double(x * x) * s * s);
+            if (r >= h_) continue;
+            rho += std::pow(1.0 - r * r / (double(h_) * h_), 3.0) * norm6;
+            const double e = 1.0 - r / h_;
+            grad -= gradNorm * e * e * a / r;
+          }
+        }
+      w.edgeDensity[size_t(t1) * Walls::kEdgeSamples + t2] = float(mass_ * rho);
+      w.edgeGradient[size_t(t1) * Walls::kEdgeSamples + t2] = float(mass_ * grad);
+    }
+
+  // The grid over the domain.
+  Grid& g = *grid_;
+  g.origin = settings_.domainMin;
+  g.inv = 1.0f / h_;
+  size_t cells = 1;
+  for (int k = 0; k < 3; ++k) {
+    g.dims[k] = std::max(1, int(std::ceil((settings_.domainMax[k] - settings_.domainMin[k]) / h_)));
+    cells *= size_t(g.dims[k]);
+  }
+  if (cells > kMaxCells)
+    throw settingError("domain", fmt::format("the domain holds {} cells of the kernel support h = {} m (at most {}): "
+                                             "shrink the domain or raise the spacing",
+                                             cells, h_, kMaxCells));
+  g.start.assign(cells + 1, 0);
+}
+
+SphAir::~SphAir() = default;
+SphAir::SphAir(SphAir&&) noexcept = default;
+SphAir& SphAir::operator=(SphAir&&) noexcept = default;
+
+void SphAir::validate() const {
+  const SphSettings& s = settings_;
+  checkRange("restDensity", s.restDensity, 0.01f, 1e4f, "kg/m³");
+  checkRange("spacing", s.spacing, 1e-4f, 100.0f, "m");
+  checkRange("supportFactor", s.supportFactor, 1.5f, 4.0f, "");
+  checkRange("soundSpeed", s.soundSpeed, 0.01f, 1e4f, "m/s");
+  checkRange("viscosity", s.viscosity, 0.0f, 1e3f, "Pa·s");
+  checkRange("backgroundPressure", s.backgroundPressure, 0.0f, 1.0f, "(share of c²ρ0)");
+  checkRange("dragCoefficient", s.dragCoefficient, 0.0f, 10.0f, "");
+  checkRange("dt", s.dt, 1e-6f, 1.0f, "s");
+  checkRange("cfl", s.cfl, 0.01f, 1.0f, "");
+  if (s.maxSubsteps < 1 || s.maxSubsteps > 100000)
+    throw settingError("maxSubsteps", fmt::format("must be in [1, 100000], got {}", s.maxSubsteps));
+  for (int k = 0; k < 3; ++k) {
+    checkFinite("domainMin", s.domainMin[k]);
+    checkFinite("domainMax", s.domainMax[k]);
+    if (!(s.domainMax[k] - s.domainMin[k] >= s.spacing))
+      throw settingError("domainMax", fmt::format("must exceed domainMin by at least the spacing on every axis "
+                                                  "(axis {}: {} to {})",
+                                                  "xyz"[k], s.domainMin[k], s.domainMax[k]));
+  }
+  if (s.maxParticles < 1 || s.maxParticles > (size_t(1) << 31))
+    throw settingError("maxParticles", fmt::format("must be in [1, 2^31], got {}", s.maxParticles));
+}
+
+uint32_t SphAir::addEmitter(const SphEmitter& e) {
+  auto bad = [&](const char* key, const std::string& m) { return Error("SPH emitter", key, m); };
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(e.position[k]) || !std::isfinite(e.direction[k]))
+      throw bad("position", "position and direction must be finite");
+  if (!(e.direction.norm() > 1e-6f)) throw bad("direction", "must not be zero");
+  if (!(e.speed > 0.0f && e.speed < settings_.soundSpeed))
+    throw bad("speed", fmt::format("must be in (0, soundSpeed = {}) m/s, got {}", settings_.soundSpeed, e.speed));
+  if (!(e.rate >= 0.0f && std::isfinite(e.rate))) throw bad("rate", fmt::format("must be >= 0 particles/s, got {}", e.rate));
+  if (!(e.radius > 0.0f && std::isfinite(e.radius))) throw bad("radius", fmt::format("must be > 0 m, got {}", e.radius));
+  const Bounds3 domain{settings_.domainMin, settings_.domainMax};
+  if (!domain.contains(e.position))
+    throw bad("position", fmt::format("({:.3g}, {:.3g}, {:.3g}) lies outside the SPH domain", e.position.x(),
+                                      e.position.y(), e.position.z()));
+  SphEmitter copy = e;
+  copy.direction.normalize();
+  emitters_.push_back(copy);
+  emitterClock_.push_back(0.0);
+  return uint32_t(emitters_.size() - 1);
+}
+
+void SphAir::clearEmitters() {
+  emitters_.clear();
+  emitterClock_.clear();
+}
+
+size_t SphAir::addParticle(const Vec3& x, const Vec3& v) {
+  x_.push_back(x);
+  v_.push_back(v);
+  rho_.push_back(settings_.restDensity);
+  sdfBudget_.push_back(-kInf);  // unknown: queried before the next density pass
+  sdf_.push_back(kInf);
+  sdfNormal_.push_back(Vec3::Zero());
+  dead_.push_back(0);
+  return x_.size() - 1;
+}
+
+size_t SphAir::fillBox(const Vec3& min, const Vec3& max, const Vec3& velocity) {
+  return fill(min, max, nullptr, velocity);
+}
+
+size_t SphAir::fillBox(const Vec3& min, const Vec3& max, const env::Environment& env, const Vec3& velocity) {
+  return fill(min, max, &env, velocity);
+}
+
+size_t SphAir::fill(const Vec3& min, const Vec3& max, const env::Environment* env, const Vec3& velocity) {
+  const float s = settings_.spacing;
+  const Vec3 lo = min.cwiseMax(settings_.domainMin), hi = max.cwiseMin(settings_.domainMax);
+  if (!isFinite(min) || !isFinite(max) || !isFinite(velocity))
+    throw Error("SPH fillBox", "", "the box and velocity must be finite");
+  Eigen::Vector3i n;
+  for (int k = 0; k < 3; ++k) n[k] = int(std::floor((hi[k] - lo[k]) / s + 1e-4f));
+  if ((n.array() < 1).any())
+    throw Error("SPH fillBox", "",
+                fmt::format("the box ({:.3g}, {:.3g}, {:.3g})–({:.3g}, {:.3g}, {:.3g}) holds no lattice site of spacing "
+                            "{} m inside the domain",
+                            min.x(), min.y(), min.z(), max.x(), max.y(), max.z(), s));
+  const size_t sites = size_t(n.x()) * n.y() * n.z();
+  if (count() + sites > settings_.maxParticles)
+    throw Error("SPH fillBox", "",
+                fmt::format("{} more particles would exceed maxParticles = {}: raise it or fill less", sites,
+                            settings_.maxParticles));
+  // Sites at the cell centres of the box's lattice: s/2 from its faces, where a wall's
+  // mirrored lattice continues it.
+  std::vector<Vec3> sitesOut(sites);
+  std::vector<uint8_t> keep(sites, 1);
+  parallelFor(0, sites, [&](size_t i) {
+    const int x = int(i % size_t(n.x())), y = int((i / size_t(n.x())) % size_t(n.y())),
+              z = int(i / (size_t(n.x()) * n.y()));
+    sitesOut[i] = lo + s * Vec3(x + 0.5f, y + 0.5f, z + 0.5f);
+    if (env && env->signedDistance(sitesOut[i]) < 0.45f * s) keep[i] = 0;  // s/2, less round-off
+  }, 1024);
+  size_t added = 0;
+  for (size_t i = 0; i < sites; ++i)
+    if (keep[i]) addParticle(sitesOut[i], velocity), ++added;
+  buildGrid();
+  return added;
+}
+
+float SphAir::backgroundPressure() const {
+  // An open face has no ambient air outside it: a background pressure would blow the air out
+  // through it (and speed a stream up by √(2 p_b/ρ0)), so open domains use none.
+  if (settings_.boundary != SphBoundary::Closed) return 0.0f;
+  return settings_.backgroundPressure * settings_.soundSpeed * settings_.soundSpeed * settings_.restDensity;
+}
+
+size_t SphAir::coupledPlantParticles() const { return plants_->size(); }
+
+void SphAir::emit(const env::Environment& env) {
+  const float s = settings_.spacing;
+  for (size_t k = 0; k < emitters_.size(); ++k) {
+    const SphEmitter& e = emitters_[k];
+    // A layer: the square lattice of spacing s within the disc.
+    const Vec3 u = anyPerpendicular(e.direction), w = e.direction.cross(u);
+    const int r = int(std::floor(e.radius / s));
+    std::vector<Vec3> layer;
+    for (int j = -r; j <= r; ++j)
+      for (int i = -r; i <= r; ++i)
+        if (float(i * i + j * j) * s * s <= e.radius * e.radius) layer.push_back(e.position + s * (float(i) * u + float(j) * w));
+    // Layers every s/speed seconds carry the rest density; a given rate spaces them in time.
+    const double interval = e.rate > 0.0f ? double(layer.size()) / e.rate : double(s) / e.speed;
+    emitterClock_[k] += settings_.dt;
+    while (emitterClock_[k] >= interval) {
+      emitterClock_[k] -= interval;
+      // The layer left the disc `age` seconds before the end of this frame.
+      const Vec3 offset = e.direction * float(e.speed * emitterClock_[k]);
+      for (const Vec3& site : layer) {
+        if (count() >= settings_.maxParticles) {
+          if (!warnedCapacity_)
+            log::warn("SPH air: {} particles reached maxParticles; emitters pause (raise maxParticles)", count());
+          warnedCapacity_ = true;
+          return;
+        }
+        const Vec3 p = site + offset;
+        if (!Bounds3{settings_.domainMin, settings_.domainMax}.contains(p)) continue;
+        if (env.obstacleCount() > 0 && env.signedDistance(p) < 0.45f * s) continue;
+        addParticle(p, e.direction * e.speed);
+      }
+    }
+  }
+}
+
+void SphAir::removeDead() {
+  size_t out = 0;
+  for (size_t i = 0; i < x_.size(); ++i) {
+    if (dead_[i]) continue;
+    if (out != i) {
+      x_[out] = x_[i], v_[out] = v_[i], rho_[out] = rho_[i];
+      sdfBudget_[out] = sdfBudget_[i], sdf_[out] = sdf_[i], sdfNormal_[out] = sdfNormal_[i];
+      dead_[out] = 0;
+    }
+    ++out;
+  }
+  x_.resize(out), v_.resize(out), rho_.resize(out), sdfBudget_.resize(out), sdf_.resize(out);
+  sdfNormal_.resize(out), dead_.resize(out);
+}
+
+void SphAir::buildGrid() {
+  Grid& g = *grid_;
+  const size_t n = count();
+  g.cellOf.resize(n);
+  parallelFor(0, n, [&](size_t i) {
+    if (dead_[i]) {
+      g.cellOf[i] = kDead;
+      return;
+    }
+    const Eigen::Vector3i c = g.cellCoord(x_[i]);
+    g.cellOf[i] = g.cellIndex(c.x(), c.y(), c.z());
+  }, 2048);
+  // Counting sort, stable in particle order: the grid order depends only on the positions.
+  std::fill(g.start.begin(), g.start.end(), 0u);
+  size_t live = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (g.cellOf[i] != kDead) ++g.start[g.cellOf[i] + 1], ++live;
+  for (size_t c = 1; c < g.start.size(); ++c) g.start[c] += g.start[c - 1];
+  g.order.resize(live);
+  {
+    std::vector<uint32_t> next(g.start.begin(), g.start.end() - 1);
+    for (size_t i = 0; i < n; ++i)
+      if (g.cellOf[i] != kDead) g.order[next[g.cellOf[i]]++] = uint32_t(i);
+  }
+  for (auto* a : {&g.px, &g.py, &g.pz, &g.vx, &g.vy, &g.vz, &g.rho, &g.pressure, &g.sdf, &g.dragRate}) a->resize(live);
+  g.sdfNormal.resize(live), g.acc.resize(live), g.dragAcc.resize(live);
+  const float c2 = settings_.soundSpeed * settings_.soundSpeed, rho0 = settings_.restDensity;
+  const float background = backgroundPressure();
+  parallelFor(0, live, [&](size_t k) {
+    const uint32_t i = g.order[k];
+    g.px[k] = x_[i].x(), g.py[k] = x_[i].y(), g.pz[k] = x_[i].z();
+    g.vx[k] = v_[i].x(), g.vy[k] = v_[i].y(), g.vz[k] = v_[i].z();
+    g.rho[k] = rho_[i];
+    g.pressure[k] = std::max(0.0f, c2 * (rho_[i] - rho0) + background);
+    g.sdf[k] = sdf_[i];
+    g.sdfNormal[k] = sdfNormal_[i];
+  }, 2048);
+}
+
+void SphAir::querySdf(const env::Environment& env, size_t i) {
+  Vec3 n;
+  const float d = env.signedDistance(x_[i], &n);
+  sdfBudget_[i] = d;
+  if (d < h_ && n.squaredNorm() > 0.0f) {
+    sdf_[i] = d;
+    sdfNormal_[i] = n;
+  } else {
+    sdf_[i] = kInf;
+    sdfNormal_[i] = Vec3::Zero();
+  }
+}
+
+// The plants' grown branch particles that can reach the domain, binned on their own grid.
+void SphAir::collectPlants(const particles::ParticleWorld& world) {
+  Plants& P = *plants_;
+  P.clear();
+  struct Candidate {
+    uint32_t slot;
+    float reach;
+  };
+  std::vector<Candidate> found;
+  float maxReach = h_;
+  const Vec3 lo = settings_.domainMin, hi = settings_.domainMax;
+  for (uint32_t i = 0; i < world.capacity(); ++i) {
+    const uint32_t f = world.flags(i);
+    if (!(f & particles::kActive) || !(f & particles::kGrown) || (f & particles::kLeaf)) continue;
+    const float reach = world.halfLength(i) + h_;
+    const Vec3& x = world.position(i);
+    if (!isFinite(x) || ((x.array() < (lo.array() - reach)).any() || (x.array() > (hi.array() + reach)).any())) continue;
+    found.push_back({i, reach});
+    maxReach = std::max(maxReach, reach);
+  }
+  P.origin = lo - Vec3::Constant(maxReach);
+  P.inv = 1.0f / maxReach;
+  size_t cells = 1;
+  for (int k = 0; k < 3; ++k) {
+    P.dims[k] = std::max(1, int(std::ceil((hi[k] - lo[k] + 2.0f * maxReach) * P.inv)));
+    cells *= size_t(P.dims[k]);
+  }
+  P.start.assign(cells + 1, 0);
+  std::vector<uint32_t> cellOf(found.size());
+  for (size_t k = 0; k < found.size(); ++k) {
+    const Eigen::Vector3i c = P.cellCoord(world.position(found[k].slot));
+    cellOf[k] = P.cellIndex(c.x(), c.y(), c.z());
+    ++P.start[cellOf[k] + 1];
+  }
+  for (size_t c = 1; c < P.start.size(); ++c) P.start[c] += P.start[c - 1];
+  const size_t n = found.size();
+  P.slot.resize(n), P.x.resize(n), P.axis.resize(n), P.v.resize(n), P.invA2.resize(n), P.invB2.resize(n);
+  P.detG.resize(n), P.volume.resize(n), P.dragK.assign(n, 0.0f), P.invZ.assign(n, 0.0f), P.reach.resize(n);
+  std::vector<uint32_t> next(P.start.begin(), P.start.end() - 1);
+  for (size_t k = 0; k < n; ++k) {
+    const uint32_t j = next[cellOf[k]]++;
+    const uint32_t i = found[k].slot;
+    const float a = world.halfLength(i), b = world.radius(i);
+    // eq. 13: G maps the particle's support ellipsoid — its own ellipsoid grown by the air's
+    // support h along every axis — onto the unit ball: G = R diag(1/α, 1/β, 1/β) Rᵀ.
+    const float alpha = a + h_, beta = b + h_;
+    P.slot[j] = i;
+    P.x[j] = world.position(i);
+    P.axis[j] = (world.orientation(i) * Vec3::UnitY()).normalized();
+    P.v[j] = world.velocity(i);
+    P.invA2[j] = 1.0f / (alpha * alpha);
+    P.invB2[j] = 1.0f / (beta * beta);
+    P.detG[j] = 1.0f / (alpha * beta * beta);
+    P.volume[j] = 4.0f / 3.0f * kPi * a * b * b;
+    P.reach[j] = found[k].reach;
+  }
+}
+
+// Once per frame, per plant particle: the air velocity around it (eq. 12 with its kernel), its
+// drag coefficient for the frame, and the force the air exerts on it — drag plus the reaction
+// to the pressure push it gives the air — as the external acceleration of eq. 1.
+void SphAir::plantSide(particles::ParticleWorld& world) {
+  Plants& P = *plants_;
+  const Grid& g = *grid_;
+  std::vector<Vec3>& external = world.externalAcceleration();
+  external.assign(world.capacity(), Vec3::Zero());
+  const float rho0 = settings_.restDensity, cd = settings_.dragCoefficient, dt = settings_.dt, m = mass_;
+  parallelFor(0, P.size(), [&](size_t jj) {
+    const uint32_t j = uint32_t(jj);
+    const Vec3 xj = P.x[j];
+    // The support ellipsoid's bounding box.
+    const float a2 = 1.0f / P.invA2[j], b2 = 1.0f / P.invB2[j];
+    Vec3 ext;
+    for (int k = 0; k < 3; ++k) ext[k] = std::sqrt(a2 * P.axis[j][k] * P.axis[j][k] + b2 * (1.0f - P.axis[j][k] * P.axis[j][k]));
+    float z = 0.0f;
+    Vec3 sum = Vec3::Zero(), pressureForce = Vec3::Zero();
+    g.forRuns(g.cellCoord(xj - ext), g.cellCoord(xj + ext), [&](uint32_t b, uint32_t e) {
+      for (uint32_t k = b; k < e; ++k) {
+        const Vec3 u(g.px[k] - xj.x(), g.py[k] - xj.y(), g.pz[k] - xj.z());
+        float along;
+        const float e2 = P.eta2(j, u, &along);
+        if (!(e2 < 1.0f)) continue;
+        const float vw = m / g.rho[k] * P.poly6(j, e2);
+        z += vw;
+        sum += vw * Vec3(g.vx[k], g.vy[k], g.vz[k]);
+        // The reaction to the air's pressure acceleration −(p/ρ) Ψ ∇W (see coupleForces).
+        if (g.pressure[k] > 0.0f) pressureForce += (m * g.pressure[k] / g.rho[k] * P.volume[j]) * P.spikyGradient(j, u, along, e2);
+      }
+    });
+    P.invZ[j] = 1.0f / std::max(z, 0.5f);
+    const uint32_t i = P.slot[j];
+    // Stem drag in cross-flow: F = ½ ρ C_d (2a · 2b) |u⊥| u⊥, u⊥ the relative air velocity
+    // across the axis (the axial part's skin friction is neglected).
+    Vec3 rel = sum * P.invZ[j] - P.v[j];
+    rel -= rel.dot(P.axis[j]) * P.axis[j];
+    const float area = 4.0f * world.halfLength(i) * world.radius(i);
+    P.dragK[j] = 0.5f * rho0 * std::min(z, 1.0f) * cd * area * rel.norm();
+    const float mj = world.mass(i);
+    // Implicit in the drag, so a light particle never overshoots the air's velocity.
+    external[i] = P.dragK[j] * rel / (mj + P.dragK[j] * dt) + pressureForce / mj;
+  }, 64);
+}
+
+void SphAir::substep(const env::Environment& env, float dt) {
+  Grid& g = *grid_;
+  const Plants& P = *plants_;
+  const Walls& W = *walls_;
+  const size_t n = g.size();
+  const float h = h_, h2 = h * h, invH2 = 1.0f / h2, m = mass_;
+  const float rho0 = settings_.restDensity, c2 = settings_.soundSpeed * settings_.soundSpeed, mu = settings_.viscosity;
+  const float background = backgroundPressure();
+  const float norm6 = kPoly6 / (h * h * h), normSpiky = kSpiky / (h * h * h * h), normVisc = kVisc / (h * h * h * h * h);
+  const bool closed = settings_.boundary == SphBoundary::Closed;
+  const Vec3 dmin = settings_.domainMin, dmax = settings_.domainMax;
+
+  // Density (eq. 12 with A = ρ: ρ_i = Σ m W_poly6) plus the walls' mirrored lattices.
+  {
+    ScopedTimer t(&timings_.density);
+    parallelFor(0, n, [&](size_t k) {
+      const float x = g.px[k], y = g.py[k], z = g.pz[k];
+      float sum = 0.0f;
+      g.forNeighbourRuns(Vec3(x, y, z), [&](uint32_t b, uint32_t e) {
+        for (uint32_t j = b; j < e; ++j) {
+          const float dx = g.px[j] - x, dy = g.py[j] - y, dz = g.pz[j] - z;
+          const float q = (dx * dx + dy * dy + dz * dz) * invH2;
+          const float t = std::max(0.0f, 1.0f - q);
+          sum += t * t * t;
+        }
+      });
+      float rho = m * norm6 * sum;
+      rho += W.lookup(W.density, g.sdf[k]);
+      if (closed) rho += boxGhostDensity(W, Vec3(x, y, z) - dmin, dmax - Vec3(x, y, z));  // walls
+      g.rho[k] = rho;
+    }, kGrain);
+  }
+
+  // Plants add to the density like boundary particles of volume Ψ (eq. 12–13); then the
+  // equation of state.
+  {
+    ScopedTimer t(&timings_.coupling);
+    parallelFor(0, n, [&](size_t k) {
+      float rho = g.rho[k];
+      if (P.size() > 0) {
+        const Vec3 x(g.px[k], g.py[k], g.pz[k]);
+        P.forCandidates(x, [&](uint32_t j) {
+          float along;
+          const float e2 = P.eta2(j, x - P.x[j], &along);
+          if (e2 < 1.0f) rho += rho0 * P.volume[j] * P.poly6(j, e2);
+        });
+        g.rho[k] = rho;
+      }
+      g.pressure[k] = std::max(0.0f, c2 * (rho - rho0) + background);
+    }, kGrain);
+  }
+
+  // Pressure and viscosity (eq. 11, MCG03 eq. 10 and 14), walls' pressure.
+  {
+    ScopedTimer t(&timings_.forces);
+    parallelFor(0, n, [&](size_t k) {
+      const float x = g.px[k], y = g.py[k], z = g.pz[k];
+      const float vx = g.vx[k], vy = g.vy[k], vz = g.vz[k], pk = g.pressure[k];
+      float ax = 0, ay = 0, az = 0;
+      g.forNeighbourRuns(Vec3(x, y, z), [&](uint32_t b, uint32_t e) {
+        for (uint32_t j = b; j < e; ++j) {
+          const float dx = x - g.px[j], dy = y - g.py[j], dz = z - g.pz[j];
+          const float r2 = dx * dx + dy * dy + dz * dz;
+          if (!(r2 < h2) || !(r2 > 0.0f)) continue;
+          const float r = std::sqrt(r2), t = h - r, invRho = 1.0f / g.rho[j];
+          // −m (p_i + p_j)/(2ρ_j) ∇W_spiky, ∇W_spiky = −45/(π h⁶)(h − r)² r̂.
+          const float fp = m * (pk + g.pressure[j]) * 0.5f * invRho * normSpiky / (h * h) * t * t / r;
+          // μ m (v_j − v_i)/ρ_j ∇²W_visc, ∇²W_visc = 45/(π h⁶)(h − r).
+          const float fv = mu * m * invRho * normVisc / h * t;
+          ax += fp * dx + fv * (g.vx[j] - vx);
+          ay += fp * dy + fv * (g.vy[j] - vy);
+          az += fp * dz + fv * (g.vz[j] - vz);
+        }
+      });
+      const float rho = g.rho[k];
+      Vec3 a = Vec3(ax, ay, az) / rho;
+      // Walls: a = −p/(ρ0 ρ) g_w(d) n.
+      const float wall = -pk / (rho0 * rho);
+      if (closed) a += wall * boxGhostGradient(W, Vec3(x, y, z) - dmin, dmax - Vec3(x, y, z));
+      if (pk > 0.0f && g.sdf[k] < h) a += wall * W.lookup(W.gradient, g.sdf[k]) * g.sdfNormal[k];
+      g.acc[k] = a;
+    }, kGrain);
+  }
+
+  // Plants push the air (boundary pressure with their anisotropic kernel) and drag it.
+  {
+    ScopedTimer t(&timings_.coupling);
+    if (P.size() > 0)
+      parallelFor(0, n, [&](size_t k) {
+        const Vec3 x(g.px[k], g.py[k], g.pz[k]), v(g.vx[k], g.vy[k], g.vz[k]);
+        const float rho = g.rho[k], pk = g.pressure[k], volume = m / rho;
+        Vec3 a = Vec3::Zero(), drag = Vec3::Zero();
+        float rate = 0.0f;
+        P.forCandidates(x, [&](uint32_t j) {
+          const Vec3 u = x - P.x[j];
+          float along;
+          const float e2 = P.eta2(j, u, &along);
+          if (!(e2 < 1.0f)) return;
+          // Mirrored pressure on a boundary particle of volume Ψ: −(p/ρ) Ψ ∇W.
+          if (pk > 0.0f) a -= (pk / rho * P.volume[j]) * P.spikyGradient(j, u, along, e2);
+          // The air's share φ = V W / max(Z, ½) of the plant particle's drag k (v_j − v)⊥.
+          const float phi = volume * P.poly6(j, e2) * P.invZ[j];
+          const float kk = phi * P.dragK[j];
+          Vec3 rel = P.v[j] - v;
+          rel -= rel.dot(P.axis[j]) * P.axis[j];
+          drag += kk * rel;
+          rate += kk;
+        });
+        g.acc[k] += a;
+        g.dragAcc[k] = drag / m;
+        g.dragRate[k] = rate / m;
+      }, kGrain);
+  }
+
+  // Symplectic Euler, then the domain and the obstacles.
+  {
+    ScopedTimer t(&timings_.obstacles);
+    const bool hasPlants = P.size() > 0, hasObstacles = env.obstacleCount() > 0;
+    const float vmax = settings_.soundSpeed, rmin = 0.25f * settings_.spacing;
+    parallelFor(0, n, [&](size_t k) {
+      const uint32_t i = g.order[k];
+      Vec3 v(g.vx[k], g.vy[k], g.vz[k]);
+      v += dt * g.acc[k];
+      if (hasPlants) v += dt * g.dragAcc[k] / (1.0f + dt * g.dragRate[k]);  // implicit in the drag
+      // A weakly compressible model means nothing past the speed of sound; a safeguard.
+      const float speed = v.norm();
+      if (speed > vmax) v *= vmax / speed;
+      const Vec3 x0(g.px[k], g.py[k], g.pz[k]);
+      Vec3 x = x0 + dt * v;
+      if (closed) {
+        for (int c = 0; c < 3; ++c) {
+          if (x[c] < dmin[c] + rmin) x[c] = dmin[c] + rmin, v[c] = std::max(v[c], 0.0f);
+          if (x[c] > dmax[c] - rmin) x[c] = dmax[c] - rmin, v[c] = std::min(v[c], 0.0f);
+        }
+      } else if ((x.array() < dmin.array()).any() || (x.array() > dmax.array()).any()) {
+        dead_[i] = 1;
+      }
+      if (hasObstacles) {
+        sdfBudget_[i] -= kSdfLipschitz * (x - x0).norm();
+        x_[i] = x;
+        if (sdfBudget_[i] < h) {
+          querySdf(env, i);
+          // Push out of the obstacle and remove the velocity into it.
+          if (sdf_[i] < rmin) {
+            const Vec3 nrm = sdfNormal_[i];
+            x += (rmin - sdf_[i]) * nrm;
+            const float vn = v.dot(nrm);
+            if (vn < 0.0f) v -= vn * nrm;
+            sdf_[i] = rmin;
+            sdfBudget_[i] = rmin;
+          }
+        }
+      }
+      x_[i] = x;
+      v_[i] = v;
+      rho_[i] = g.rho[k];
+    }, kGrain);
+  }
+}
+
+void SphAir::step(const env::Environment& env, particles::ParticleWorld* plants) {
+  Timer total;
+  timings_ = SphTimings();
+  const float h = h_;
+  {
+    ScopedTimer t(&timings_.obstacles);
+    // Everyone once per frame (obstacles may have moved), then within the frame only particles
+    // that may have come within h of one.
+    if (env.obstacleCount() > 0) {
+      parallelFor(0, count(), [&](size_t i) { querySdf(env, i); }, 1024);
+    } else {
+      std::fill(sdf_.begin(), sdf_.end(), kInf);
+      std::fill(sdfBudget_.begin(), sdfBudget_.end(), kInf);
+    }
+  }
+  {
+    ScopedTimer t(&timings_.neighbours);
+    buildGrid();
+  }
+  {
+    ScopedTimer t(&timings_.coupling);
+    if (plants) {
+      collectPlants(*plants);
+      plantSide(*plants);
+    } else {
+      plants_->clear();
+    }
+  }
+
+  // Substeps: Δt ≤ cfl·h/(c + v_max) (acoustic CFL) and ≤ 0.125 h² ρ0/μ (viscous diffusion).
+  float vmax = 0.0f;
+  for (const SphEmitter& e : emitters_) vmax = std::max(vmax, e.speed);
+  vmax = tbb::parallel_reduce(
+      tbb::blocked_range<size_t>(0, count(), 4096), vmax,
+      [&](const tbb::blocked_range<size_t>& r, float m) {
+        for (size_t i = r.begin(); i != r.end(); ++i) m = std::max(m, v_[i].squaredNorm());
+        return m;
+      },
+      [](float a, float b) { return std::max(a, b); });
+  vmax = std::min(std::sqrt(vmax), settings_.soundSpeed);
+  float limit = settings_.cfl * h / (settings_.soundSpeed + vmax);
+  if (settings_.viscosity > 0.0f) limit = std::min(limit, 0.125f * h * h * settings_.restDensity / settings_.viscosity);
+  int substeps = int(std::ceil(settings_.dt / limit - 1e-4f));
+  if (substeps > settings_.maxSubsteps) {
+    if (!warnedSubsteps_)
+      log::warn("SPH air: a stable step needs {} substeps, maxSubsteps is {} (raise it, or lower soundSpeed)", substeps,
+                settings_.maxSubsteps);
+    warnedSubsteps_ = true;
+    substeps = settings_.maxSubsteps;
+  }
+  substeps = std::max(substeps, 1);
+  const float dt = settings_.dt / float(substeps);
+  for (int s = 0; s < substeps; ++s) {
+    substep(env, dt);
+    ScopedTimer t(&timings_.neighbours);
+    buildGrid();
+  }
+  timings_.substeps = substeps;
+
+  emit(env);
+  removeDead();
+  {
+    ScopedTimer t(&timings_.neighbours);
+    buildGrid();
+  }
+  time_ += settings_.dt;
+  ++steps_;
+  timings_.total = total.seconds();
+}
+
+Vec3 SphAir::velocityAt(const Vec3& p) const { return velocityAt(p, nullptr); }
+
+Vec3 SphAir::velocityAt(const Vec3& p, bool* covered) const {
+  const Grid& g = *grid_;
+  if (covered) *covered = false;
+  if (!isFinite(p) || !Bounds3{settings_.domainMin, settings_.domainMax}.contains(p) || g.size() == 0)
+    return Vec3::Zero();
+  const float invH2 = 1.0f / (h_ * h_), norm6 = kPoly6 / (h_ * h_ * h_);
+  float z = 0.0f;
+  Vec3 sum = Vec3::Zero();
+  g.forNeighbourRuns(p, [&](uint32_t b, uint32_t e) {
+    for (uint32_t k = b; k < e; ++k) {
+      const float dx = g.px[k] - p.x(), dy = g.py[k] - p.y(), dz = g.pz[k] - p.z();
+      const float t = 1.0f - (dx * dx + dy * dy + dz * dz) * invH2;
+      if (!(t > 0.0f)) continue;
+      const float w = mass_ / g.rho[k] * norm6 * t * t * t;
+      z += w;
+      sum += w * Vec3(g.vx[k], g.vy[k], g.vz[k]);
+    }
+  });
+  if (covered) *covered = z > 0.0f;
+  return sum / std::max(z, 0.5f);
+}
+
+}  // namespace tendril::wind

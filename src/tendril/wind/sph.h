@@ -1,0 +1,167 @@
+// Air as SPH particles, coupled both ways with the oriented-particle plants (seed 000 §5.3).
+//
+// Weakly compressible SPH after Müller, Charypar & Gross 2003 ("Particle-based fluid
+// simulation for interactive applications", MCG03): density by the poly6 kernel, pressure
+// p = c²(ρ − ρ0) with the spiky kernel's gradient, viscosity with the viscosity kernel's
+// Laplacian (seed 000 eq. 11–12). Grown branch particles of a ParticleWorld take part through
+// an anisotropic kernel W(G(x − x_j)) whose tensor G comes from the particle's ellipsoid
+// (eq. 13, after Owen et al. 1997): they add to the air's density and push it by pressure
+// like boundary particles, and they drag the air with a stem's cross-flow drag; the equal and
+// opposite force becomes the plant particle's external acceleration a_e in eq. 1.
+// Obstacles come from the Environment's signed distances; the domain box is either closed
+// (walls) or open (particles leaving it are removed).
+//
+// Determinism: every sum is gathered per particle in grid order, with no atomics; particles
+// are spawned and removed sequentially. Results are bit-identical for any thread count.
+// Units: metres, seconds, kilograms; see docs/sph.md for the equations and defaults.
+#pragma once
+
+#include "tendril/core/math.h"
+#include "tendril/env/wind_field.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace tendril::env {
+class Environment;
+}
+namespace tendril::particles {
+class ParticleWorld;
+}
+
+namespace tendril::wind {
+
+enum class SphBoundary {
+  Outflow,  // particles leaving the domain box are removed
+  Closed,   // the domain box's faces are walls
+};
+
+struct SphSettings {
+  float restDensity = 1.25f;      // ρ0 (kg/m³), air near 10 °C at sea level
+  float spacing = 0.05f;          // rest distance s between particles (m); a particle holds ρ0·s³
+  float supportFactor = 2.0f;     // kernel support h = supportFactor · s (1.5–4)
+  float soundSpeed = 10.0f;       // c (m/s): the equation of state p = c² (ρ − ρ0) + p_b, clamped at 0
+  float backgroundPressure = 0.05f;  // p_b / (c²ρ0), closed domains only: air down to this deficit still pulls
+  float viscosity = 0.02f;        // μ (Pa·s), artificial (air's own is 1.8e-5; see docs/sph.md)
+  float dragCoefficient = 1.2f;   // C_d of a branch particle in cross-flow (a cylinder)
+  float dt = 0.025f;              // frame step (s); use the plant world's step
+  float cfl = 0.4f;               // substeps keep Δt ≤ cfl · h / (c + v_max)
+  int maxSubsteps = 64;           // per frame; more would be needed → the frame is clamped, warned once
+  Vec3 domainMin = Vec3(-1, 0, -1);  // the simulated box (m)
+  Vec3 domainMax = Vec3(1, 2, 1);
+  SphBoundary boundary = SphBoundary::Outflow;
+  size_t maxParticles = 1'000'000;  // emitters stop (warned once) at this many air particles
+};
+
+// A disc of the given radius, facing `direction`, spawning layers of particles at `speed`.
+struct SphEmitter {
+  Vec3 position = Vec3::Zero();        // disc centre (m), inside the domain
+  Vec3 direction = Vec3(1, 0, 0);      // flow direction (normalised on add)
+  float speed = 2.0f;                  // m/s, > 0
+  float rate = 0.0f;                   // particles/s; 0 = the rest density's flow, ρ0·speed·area/m
+  float radius = 0.25f;                // m
+};
+
+// Wall-clock seconds of the last step, per phase (for benchmarks, never for behaviour).
+struct SphTimings {
+  double neighbours = 0, density = 0, forces = 0, coupling = 0, obstacles = 0, total = 0;
+  int substeps = 0;
+};
+
+// An env::AirFlow: install it with Environment::setAirFlow for the wind field's sph mode.
+class SphAir final : public env::AirFlow {
+ public:
+  // Throws Error naming the bad setting.
+  explicit SphAir(const SphSettings& settings = {});
+  ~SphAir() override;
+  SphAir(SphAir&&) noexcept;
+  SphAir& operator=(SphAir&&) noexcept;
+
+  const SphSettings& settings() const { return settings_; }
+
+  // Throws Error when the emitter is not finite, its speed, rate or radius is out of range,
+  // or its centre lies outside the domain.
+  uint32_t addEmitter(const SphEmitter& emitter);
+  const std::vector<SphEmitter>& emitters() const { return emitters_; }
+  void clearEmitters();
+
+  // Fills the box (clipped to the domain) with particles on a cubic lattice of the rest
+  // spacing, moving at `velocity`; with an environment, sites closer than s/2 to an obstacle
+  // are left out. Returns the number added. Throws Error when the box is empty or the
+  // particles would exceed maxParticles.
+  size_t fillBox(const Vec3& min, const Vec3& max, const Vec3& velocity = Vec3::Zero());
+  size_t fillBox(const Vec3& min, const Vec3& max, const env::Environment& env,
+                 const Vec3& velocity = Vec3::Zero());
+
+  // One frame of settings().dt in as many substeps as stability needs. With `plants`, their
+  // grown branch particles (kGrown, not kLeaf) and the air act on each other: this overwrites
+  // plants->externalAcceleration() (every slot; zero for particles that do not take part) with
+  // the air's drag and pressure on each particle. Call it before plants->step(env), at the
+  // same dt.
+  void step(const env::Environment& env, particles::ParticleWorld* plants);
+
+  // The air velocity w(x) (m/s) at p by SPH interpolation (eq. 12), Shepard-normalised where
+  // the air is complete: Σ V_j v_j W / max(Σ V_j W, ½). It fades to zero at the edge of the
+  // air and is zero where no air particle lies within h, and outside the domain.
+  // Thread-safe between steps.
+  Vec3 velocityAt(const Vec3& p) const;
+  // The same; `covered` says whether any air particle lies within h of p.
+  Vec3 velocityAt(const Vec3& p, bool* covered) const override;
+
+  // --- state (dense: indices [0, count()); removing particles keeps the others' order and
+  // new particles reuse the freed slots at the end) ---
+  size_t count() const { return x_.size(); }
+  const std::vector<Vec3>& positions() const { return x_; }
+  const std::vector<Vec3>& velocities() const { return v_; }
+  const std::vector<float>& densities() const { return rho_; }  // kg/m³, from the last substep
+  float particleMass() const { return mass_; }   // kg
+  float supportRadius() const { return h_; }     // h (m)
+  float time() const { return time_; }
+  uint64_t stepCount() const { return steps_; }
+  const SphTimings& timings() const { return timings_; }
+  // Grown branch particles of the plants that interacted with the air in the last step.
+  size_t coupledPlantParticles() const;
+
+ private:
+  struct Grid;
+  struct Plants;
+  struct Walls;
+
+  void validate() const;
+  float backgroundPressure() const;  // Pa
+  size_t fill(const Vec3& min, const Vec3& max, const env::Environment* env, const Vec3& velocity);
+  void emit(const env::Environment& env);
+  void removeDead();
+  void buildGrid();
+  void collectPlants(const particles::ParticleWorld& plants);
+  void plantSide(particles::ParticleWorld& plants);
+  void substep(const env::Environment& env, float dt);
+  void querySdf(const env::Environment& env, size_t i);
+  void integrate(const env::Environment& env, float dt);
+  size_t addParticle(const Vec3& x, const Vec3& v);
+
+  SphSettings settings_;
+  std::vector<SphEmitter> emitters_;
+  std::vector<double> emitterClock_;  // s of emission owed per emitter
+  float mass_ = 0, h_ = 0;
+  float time_ = 0;
+  uint64_t steps_ = 0;
+  bool warnedCapacity_ = false, warnedSubsteps_ = false;
+  SphTimings timings_;
+
+  // Particles, dense, in spawn order.
+  std::vector<Vec3> x_, v_;
+  std::vector<float> rho_;
+  std::vector<float> sdfBudget_;  // lower bound of the distance to any obstacle (m)
+  std::vector<float> sdf_;        // distance to the nearest obstacle when closer than h, else +inf
+  std::vector<Vec3> sdfNormal_;
+  std::vector<uint8_t> dead_;
+
+  std::unique_ptr<Grid> grid_;
+  std::unique_ptr<Plants> plants_;
+  std::unique_ptr<Walls> walls_;
+};
+
+}  // namespace tendril::wind

@@ -1,0 +1,349 @@
+// SPH air coupled both ways with particle plants (seed 000 §5.3): still air keeps its rest
+// density and stays out of obstacles, a stream never passes through a wall, a plant in a stream
+// bends downwind and slows the air behind it, results do not depend on the thread count, and
+// bad settings are refused.
+#include "support/test_paths.h"
+#include "tendril/core/error.h"
+#include "tendril/core/hash.h"
+#include "tendril/core/parallel.h"
+#include "tendril/env/environment.h"
+#include "tendril/env/primitives.h"
+#include "tendril/particles/particle_model.h"
+#include "tendril/wind/sph.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+namespace tendril::wind {
+namespace {
+
+std::unique_ptr<env::Environment> emptyEnv() {
+  auto env = std::make_unique<env::Environment>();
+  env->commit();
+  return env;
+}
+
+void addBox(env::Environment& env, const std::string& name, const Vec3& size, const Vec3& centre) {
+  env::ObstacleDef def;
+  def.name = name;
+  def.kind = env::ObstacleKind::Box;
+  def.mesh = env::makeBox(size);
+  def.worldFromLocal.translation = centre;
+  env.addObstacle(std::move(def));
+}
+
+void addGround(env::Environment& env, const Vec2& size) {
+  env::ObstacleDef def;
+  def.name = "ground";
+  def.kind = env::ObstacleKind::Plane;
+  def.mesh = env::makePlane(size, 0.2f);
+  env.addObstacle(std::move(def));
+}
+
+float maxDensityError(const SphAir& air) {
+  float worst = 0.0f;
+  for (float rho : air.densities()) worst = std::max(worst, std::abs(rho / air.settings().restDensity - 1.0f));
+  return worst;
+}
+
+float maxSpeed(const SphAir& air) {
+  float v = 0.0f;
+  for (const Vec3& u : air.velocities()) v = std::max(v, u.norm());
+  return v;
+}
+
+TEST(SphAir, StillAirInAClosedBoxKeepsItsRestDensityAndNeverEntersAnObstacle) {
+  // A closed 1 × 0.8 × 0.8 m box of still air (5k particles) around a 30 cm cube standing on
+  // its floor, for 2.25 s.
+  auto env = std::make_unique<env::Environment>();
+  addBox(*env, "cube", Vec3(0.3f, 0.3f, 0.3f), Vec3(0.5f, 0.15f, 0.4f));
+  env->commit();
+  SphSettings s;
+  s.boundary = SphBoundary::Closed;
+  s.domainMin = Vec3(0, 0, 0);
+  s.domainMax = Vec3(1.0f, 0.8f, 0.8f);
+  SphAir air(s);
+  const size_t n = air.fillBox(s.domainMin, s.domainMax, *env);
+  EXPECT_GT(n, 4500u);
+  // The lattice the box is filled with is the model's equilibrium next to flat walls, not next
+  // to the cube's convex edges (walls act as mirrored lattices across the nearest surface):
+  // the particles there settle within the first 0.1 s.
+  const int frames = 90, settling = 4;
+  float firstFrames = 0.0f, afterwards = 0.0f, worstSdf = 1.0f;
+  size_t crossings = 0;
+  std::vector<Vec3> before = air.positions();
+  for (int frame = 0; frame < frames; ++frame) {
+    air.step(*env, nullptr);
+    ASSERT_EQ(air.count(), n);  // closed: nothing leaves, nothing is added
+    float& worst = frame < settling ? firstFrames : afterwards;
+    worst = std::max(worst, maxDensityError(air));
+    for (size_t i = 0; i < n; ++i) {
+      worstSdf = std::min(worstSdf, env->signedDistance(air.positions()[i]));
+      crossings += env->countSegmentHits(before[i], air.positions()[i]);
+    }
+    before = air.positions();
+  }
+  std::printf("still air: max |rho/rho0 - 1| %.4f in the first %d frames, %.4f afterwards; min sdf %.4f m; "
+              "max speed %.4f m/s\n",
+              firstFrames, settling, afterwards, worstSdf, maxSpeed(air));
+  EXPECT_LT(afterwards, 0.03f) << "every particle, every frame after the first 0.1 s, within 3% of rest density";
+  EXPECT_LT(firstFrames, 0.06f);
+  EXPECT_GE(worstSdf, 0.0f) << "no particle inside the cube";
+  EXPECT_EQ(crossings, 0u) << "no particle path through the cube's surface";
+  EXPECT_LT(maxSpeed(air), 0.1f) << "still air stays still (a stream here is 3–5 m/s)";
+}
+
+TEST(SphAir, AStreamAgainstAWallNeverPassesThroughIt) {
+  // A 3 m/s stream from a disc hits a 4 cm thick wall that closes the domain's cross-section:
+  // the air piles up and leaves sideways, never through or into the wall.
+  auto env = std::make_unique<env::Environment>();
+  addBox(*env, "wall", Vec3(0.04f, 2.0f, 2.0f), Vec3(0.5f, 0.4f, 0.0f));
+  env->commit();
+  SphSettings s;
+  s.spacing = 0.04f;
+  s.domainMin = Vec3(-0.4f, 0.0f, -0.4f);
+  s.domainMax = Vec3(0.9f, 0.8f, 0.4f);
+  SphAir air(s);
+  SphEmitter e;
+  e.position = Vec3(-0.35f, 0.4f, 0.0f);
+  e.direction = Vec3(1, 0, 0);
+  e.speed = 3.0f;
+  e.radius = 0.2f;
+  air.addEmitter(e);
+  size_t behind = 0, inside = 0, maxCount = 0;
+  float fastest = 0.0f;
+  for (int frame = 0; frame < 40; ++frame) {
+    air.step(*env, nullptr);
+    maxCount = std::max(maxCount, air.count());
+    for (const Vec3& p : air.positions()) {
+      if (p.x() > 0.48f) ++behind;
+      if (env->signedDistance(p) < 0.0f) ++inside;
+    }
+    fastest = std::max(fastest, maxSpeed(air));
+  }
+  std::printf("stream: up to %zu particles, fastest %.2f m/s\n", maxCount, fastest);
+  EXPECT_GT(maxCount, 1500u) << "the stream reached the wall";
+  EXPECT_EQ(behind, 0u);
+  EXPECT_EQ(inside, 0u);
+}
+
+TEST(SphAir, VelocityAtInterpolatesTheFlowAndIsZeroWhereThereIsNoAir) {
+  auto env = emptyEnv();
+  SphSettings s;
+  s.domainMin = Vec3(0, 0, 0);
+  s.domainMax = Vec3(1, 1, 1);
+  SphAir air(s);
+  air.fillBox(Vec3(0, 0, 0), Vec3(0.5f, 1, 1), Vec3(1.5f, -0.5f, 0.25f));
+  const Vec3 inside = air.velocityAt(Vec3(0.25f, 0.5f, 0.5f));
+  EXPECT_LT((inside - Vec3(1.5f, -0.5f, 0.25f)).norm(), 0.015f) << inside.transpose();
+  bool covered = true;
+  EXPECT_EQ(air.velocityAt(Vec3(0.9f, 0.5f, 0.5f), &covered), Vec3::Zero()) << "farther than h from any particle";
+  EXPECT_FALSE(covered);
+  air.velocityAt(Vec3(0.25f, 0.5f, 0.5f), &covered);
+  EXPECT_TRUE(covered);
+  EXPECT_EQ(air.velocityAt(Vec3(2, 0.5f, 0.5f)), Vec3::Zero()) << "outside the domain";
+  // At the edge of the air the velocity fades instead of jumping.
+  const float edge = air.velocityAt(Vec3(0.5f + 0.5f * air.supportRadius(), 0.5f, 0.5f)).x();
+  EXPECT_GT(edge, 0.0f);
+  EXPECT_LT(edge, 1.5f);
+}
+
+// A 4 × 4 clump of upright stems 6 cm apart, 60 cm tall, grown without air, then stopped growing.
+particles::ParticleWorld grownClump(const env::Environment& env) {
+  particles::ParticleSpecies s = particles::loadSpecies("ivy-particles", test::sourceDir());
+  s.maxParticles = 12;
+  s.maxLateralBuds = 0;
+  s.leafStep = 0;
+  s.phototropism = 0.0f;
+  s.randomWalk = 0.0f;
+  s.surfaceAdaption = 0.0f;
+  s.spreading = 0.0f;
+  s.crowding = 0;
+  s.growthRate = 0.2f;
+  s.minGrowthLight = 1.0f;
+  s.radius = 0.01f;
+  s.apexTaper = 1.0f;
+  s.secondaryGrowth = 0.0f;
+  s.density = 300.0f;  // light wood (seed 000 uses 300–1000 kg/m³)
+  s.stiffness = 0.25f;
+  particles::WorldSettings ws;
+  ws.plantCollisions = false;
+  particles::ParticleWorld w(ws);
+  for (int i = 0; i < 4; ++i)
+    for (int k = 0; k < 4; ++k)
+      w.addPlant("stem", s, Vec3(0.06f * (float(i) - 1.5f), 0.0f, 0.06f * (float(k) - 1.5f)), Vec3(0, 1, 0),
+                 uint64_t(4 * i + k + 1), env);
+  for (int step = 0; step < 300; ++step) w.step(env);
+  s.growthSpeed = 0.0f;
+  for (uint32_t p = 0; p < w.plantCount(); ++p) w.setSpecies(p, s);
+  for (int step = 0; step < 100; ++step) w.step(env);
+  return w;
+}
+
+// Mean x of the stems' top particles.
+float meanTopX(const particles::ParticleWorld& w) {
+  std::vector<float> topY(w.plantCount(), -1.0f), topX(w.plantCount(), 0.0f);
+  for (uint32_t i = 0; i < w.capacity(); ++i)
+    if (w.active(i) && w.position(i).y() > topY[w.plantOf(i)]) {
+      topY[w.plantOf(i)] = w.position(i).y();
+      topX[w.plantOf(i)] = w.position(i).x();
+    }
+  float sum = 0.0f;
+  for (float x : topX) sum += x;
+  return sum / float(topX.size());
+}
+
+// Mean downwind air speed over a box of sample points.
+float meanSpeedX(const SphAir& air, const Vec3& lo, const Vec3& hi) {
+  double sum = 0.0;
+  int n = 0;
+  for (int i = 0; i <= 4; ++i)
+    for (int j = 0; j <= 4; ++j)
+      for (int k = 0; k <= 4; ++k) {
+        const Vec3 p = lo + (hi - lo).cwiseProduct(Vec3(float(i), float(j), float(k)) / 4.0f);
+        sum += air.velocityAt(p).x();
+        ++n;
+      }
+  return float(sum / n);
+}
+
+struct Tunnel {
+  std::unique_ptr<env::Environment> env;
+  SphSettings settings;
+};
+
+Tunnel windTunnel() {
+  Tunnel t;
+  t.env = std::make_unique<env::Environment>();
+  addGround(*t.env, Vec2(4, 4));
+  t.env->commit();
+  t.settings.spacing = 0.06f;
+  t.settings.domainMin = Vec3(-0.7f, -0.1f, -0.5f);
+  t.settings.domainMax = Vec3(1.0f, 0.9f, 0.5f);
+  return t;
+}
+
+SphAir streamingAir(const Tunnel& t, float speed) {
+  SphAir air(t.settings);
+  air.fillBox(t.settings.domainMin, t.settings.domainMax, *t.env, Vec3(speed, 0, 0));
+  SphEmitter e;
+  e.position = Vec3(t.settings.domainMin.x() + 0.02f, 0.4f, 0.0f);
+  e.direction = Vec3(1, 0, 0);
+  e.speed = speed;
+  e.radius = 0.75f;
+  air.addEmitter(e);
+  return air;
+}
+
+TEST(SphCoupling, APlantInAStreamBendsDownwindAndSlowsTheAirInItsLee) {
+  const Tunnel tunnel = windTunnel();
+  const env::Environment& env = *tunnel.env;
+  const particles::ParticleWorld grown = grownClump(env);
+  ASSERT_EQ(grown.particleCount(), 16u * 12u);
+
+  const float wind = 5.0f;
+  particles::ParticleWorld windy = grown, calm = grown;
+  SphAir coupled = streamingAir(tunnel, wind), alone = streamingAir(tunnel, wind);
+  const Vec3 leeLo(0.15f, 0.1f, -0.1f), leeHi(0.45f, 0.5f, 0.1f);  // behind the clump
+  double leeCoupled = 0.0, leeAlone = 0.0;
+  size_t coupledParticles = 0;
+  const int frames = 32, averaged = 12;
+  for (int frame = 0; frame < frames; ++frame) {
+    coupled.step(env, &windy);
+    windy.step(env);
+    alone.step(env, nullptr);
+    calm.step(env);
+    coupledParticles = std::max(coupledParticles, coupled.coupledPlantParticles());
+    if (frame >= frames - averaged) {
+      leeCoupled += meanSpeedX(coupled, leeLo, leeHi) / averaged;
+      leeAlone += meanSpeedX(alone, leeLo, leeHi) / averaged;
+    }
+  }
+  const float bend = meanTopX(windy) - meanTopX(calm);
+  const double slowdown = 1.0 - leeCoupled / leeAlone;
+  std::printf("coupled %zu plant particles; tops moved %.3f m downwind; lee speed %.3f vs %.3f m/s (%.1f%% slower)\n",
+              coupledParticles, bend, leeCoupled, leeAlone, 100.0 * slowdown);
+  EXPECT_GE(coupledParticles, 16u * 10u) << "grown stem particles take part, roots and apices need not";
+  EXPECT_GT(bend, 0.02f) << "the stems' tops lean downwind by more than 2 cm";
+  EXPECT_GT(slowdown, 0.10) << "the air behind the clump is at least 10% slower than without it";
+  EXPECT_GT(leeAlone, 0.9 * wind) << "without plants the stream keeps its speed";
+}
+
+TEST(SphCoupling, ResultsAreTheSameForAnyThreadCount) {
+  Tunnel tunnel = windTunnel();
+  tunnel.settings.spacing = 0.07f;
+  const particles::ParticleWorld grown = grownClump(*tunnel.env);
+  auto run = [&](float speed) {
+    particles::ParticleWorld w = grown;
+    SphAir air = streamingAir(tunnel, speed);
+    for (int frame = 0; frame < 12; ++frame) {
+      air.step(*tunnel.env, &w);
+      w.step(*tunnel.env);
+    }
+    Hasher h;
+    h.add(air.positions());
+    h.add(air.velocities());
+    h.add(air.densities());
+    for (uint32_t i = 0; i < w.capacity(); ++i)
+      if (w.active(i)) h.add(w.position(i));
+    return h.digest();
+  };
+  setThreadCount(1);
+  const uint64_t one = run(3.0f);
+  setThreadCount(2);
+  const uint64_t two = run(3.0f);
+  const uint64_t other = run(3.1f);
+  setThreadCount(0);
+  EXPECT_EQ(one, two);
+  EXPECT_NE(one, other);
+}
+
+TEST(SphAir, BadSettingsAreRefused) {
+  auto refuses = [](auto&& change) {
+    SphSettings s;
+    change(s);
+    EXPECT_THROW(SphAir{s}, Error);
+  };
+  refuses([](SphSettings& s) { s.spacing = 0.0f; });
+  refuses([](SphSettings& s) { s.restDensity = std::nanf(""); });
+  refuses([](SphSettings& s) { s.soundSpeed = -1.0f; });
+  refuses([](SphSettings& s) { s.viscosity = -0.1f; });
+  refuses([](SphSettings& s) { s.supportFactor = 1.0f; });
+  refuses([](SphSettings& s) { s.cfl = 0.0f; });
+  refuses([](SphSettings& s) { s.maxSubsteps = 0; });
+  refuses([](SphSettings& s) { s.domainMax = Vec3(-2, 1, 1); });
+  refuses([](SphSettings& s) { s.domainMax = Vec3(1e4f, 1e4f, 1e4f); });  // too many grid cells
+  try {
+    SphSettings s;
+    s.spacing = -0.05f;
+    SphAir air(s);
+    FAIL() << "a negative spacing was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.location(), "spacing");
+    EXPECT_NE(e.message().find("-0.05"), std::string::npos) << e.what();
+  }
+
+  SphAir air;
+  SphEmitter e;
+  e.position = Vec3(5, 0, 0);  // outside the default domain
+  EXPECT_THROW(air.addEmitter(e), Error);
+  e.position = Vec3(0, 1, 0);
+  e.speed = air.settings().soundSpeed;  // the model is weakly compressible: slower than sound
+  EXPECT_THROW(air.addEmitter(e), Error);
+  e.speed = 2.0f;
+  e.direction = Vec3::Zero();
+  EXPECT_THROW(air.addEmitter(e), Error);
+  EXPECT_TRUE(air.emitters().empty());
+  EXPECT_THROW(air.fillBox(Vec3(3, 3, 3), Vec3(4, 4, 4)), Error) << "outside the domain";
+  SphSettings small;
+  small.maxParticles = 100;
+  SphAir capped(small);
+  EXPECT_THROW(capped.fillBox(small.domainMin, small.domainMax), Error) << "more than maxParticles";
+  EXPECT_EQ(capped.count(), 0u);
+}
+
+}  // namespace
+}  // namespace tendril::wind
