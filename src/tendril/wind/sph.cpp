@@ -82,7 +82,7 @@ struct SphAir::Grid {
     return c;
   }
   uint32_t cellIndex(int x, int y, int z) const { return uint32_t((size_t(z) * dims.y() + y) * dims.x() + x); }
-  // Calls f(begin, end) for the grid-index runs of the cells within `reach` cells of c.
+  // Calls f(begin, end) for the grid-index runs (one per row of x-adjacent cells) of the box lo..hi.
   template <class F>
   void forRuns(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, F&& f) const {
     for (int z = lo.z(); z <= hi.z(); ++z)

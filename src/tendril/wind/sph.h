@@ -88,7 +88,7 @@ class SphAir final : public env::AirFlow {
   void clearEmitters();
 
   // Fills the box (clipped to the domain) with particles on a cubic lattice of the rest
-  // spacing, moving at `velocity`; with an environment, sites closer than s/2 to an obstacle
+  // spacing, moving at `velocity`; with an environment, sites closer than 0.45 s to an obstacle
   // are left out. Returns the number added. Throws Error when the box is empty or the
   // particles would exceed maxParticles.
   size_t fillBox(const Vec3& min, const Vec3& max, const Vec3& velocity = Vec3::Zero());
