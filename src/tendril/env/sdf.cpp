@@ -8,7 +8,7 @@
 namespace tendril::env {
 
 SdfGrid::SdfGrid(const Bounds3& bounds, float cell, const std::function<float(const Vec3&)>& distance)
-    : origin_(bounds.min), cell_(cell) {
+    : origin_(bounds.min), cell_(cell), invCell_(1.0f / cell) {
   Vec3 extent = bounds.size();
   for (int k = 0; k < 3; ++k) dims_[k] = std::max(2, static_cast<int>(std::ceil(extent[k] / cell)) + 1);
   values_.resize(static_cast<size_t>(dims_.x()) * dims_.y() * dims_.z());
@@ -19,37 +19,45 @@ SdfGrid::SdfGrid(const Bounds3& bounds, float cell, const std::function<float(co
     int x = static_cast<int>(i % dims_.x());
     values_[i] = distance(origin_ + cell_ * Vec3(float(x), float(y), float(z)));
   }, 256);
+  max_ = origin_ + cell_ * (dims_ - Eigen::Vector3i::Ones()).cast<float>();
 }
 
 Bounds3 SdfGrid::bounds() const {
   Bounds3 b;
   b.extend(origin_);
-  b.extend(origin_ + cell_ * (dims_ - Eigen::Vector3i::Ones()).cast<float>());
+  b.extend(max_);
   return b;
 }
 
-float SdfGrid::trilinear(const Vec3& p) const {
-  Vec3 g = (p - origin_) / cell_;
+inline size_t SdfGrid::locate(const Vec3& clamped, Vec3* fraction) const {
+  // Collision handling samples every particle up to three times per step: the cell and its
+  // fractions come from one multiply per axis (no division, no bounds() rebuild per query).
+  const Vec3 g = (clamped - origin_) * invCell_;
   int i[3];
-  float f[3];
   for (int k = 0; k < 3; ++k) {
-    float c = std::clamp(g[k], 0.0f, float(dims_[k] - 1));
+    const float c = std::clamp(g[k], 0.0f, float(dims_[k] - 1));
     i[k] = std::min(static_cast<int>(c), dims_[k] - 2);
-    f[k] = c - float(i[k]);
+    (*fraction)[k] = c - float(i[k]);
   }
+  return (static_cast<size_t>(i[2]) * dims_.y() + i[1]) * dims_.x() + i[0];
+}
+
+float SdfGrid::trilinear(const Vec3& p) const {
+  Vec3 f;
+  const float* c = values_.data() + locate(p, &f);
+  const size_t dy = static_cast<size_t>(dims_.x()), dz = dy * static_cast<size_t>(dims_.y());
   auto lerp = [](float a, float b, float t) { return a + (b - a) * t; };
-  float c00 = lerp(at(i[0], i[1], i[2]), at(i[0] + 1, i[1], i[2]), f[0]);
-  float c10 = lerp(at(i[0], i[1] + 1, i[2]), at(i[0] + 1, i[1] + 1, i[2]), f[0]);
-  float c01 = lerp(at(i[0], i[1], i[2] + 1), at(i[0] + 1, i[1], i[2] + 1), f[0]);
-  float c11 = lerp(at(i[0], i[1] + 1, i[2] + 1), at(i[0] + 1, i[1] + 1, i[2] + 1), f[0]);
-  return lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2]);
+  const float c00 = lerp(c[0], c[1], f.x()), c10 = lerp(c[dy], c[dy + 1], f.x());
+  const float c01 = lerp(c[dz], c[dz + 1], f.x()), c11 = lerp(c[dz + dy], c[dz + dy + 1], f.x());
+  return lerp(lerp(c00, c10, f.y()), lerp(c01, c11, f.y()), f.z());
 }
 
 float SdfGrid::sample(const Vec3& p) const {
   if (values_.empty() || !isFinite(p)) return std::numeric_limits<float>::infinity();
-  Bounds3 b = bounds();
-  Vec3 clamped = p.cwiseMax(b.min).cwiseMin(b.max);
-  return trilinear(clamped) + (p - clamped).norm();
+  const Vec3 clamped = p.cwiseMax(origin_).cwiseMin(max_);
+  const Vec3 outside = p - clamped;
+  const float extra2 = outside.squaredNorm();
+  return trilinear(clamped) + (extra2 > 0.0f ? std::sqrt(extra2) : 0.0f);
 }
 
 float SdfGrid::sampleWithGradient(const Vec3& p, Vec3* gradient) const {
@@ -57,33 +65,32 @@ float SdfGrid::sampleWithGradient(const Vec3& p, Vec3* gradient) const {
     *gradient = Vec3::Zero();
     return std::numeric_limits<float>::infinity();
   }
-  Bounds3 b = bounds();
-  Vec3 clamped = p.cwiseMax(b.min).cwiseMin(b.max);
-  Vec3 outside = p - clamped;
-  float extra = outside.norm();
-  Vec3 g = (clamped - origin_) / cell_;
-  int i[3];
-  float f[3];
-  for (int k = 0; k < 3; ++k) {
-    float c = std::clamp(g[k], 0.0f, float(dims_[k] - 1));
-    i[k] = std::min(static_cast<int>(c), dims_[k] - 2);
-    f[k] = c - float(i[k]);
+  const Vec3 clamped = p.cwiseMax(origin_).cwiseMin(max_);
+  const Vec3 outside = p - clamped;
+  const float extra2 = outside.squaredNorm();
+  Vec3 f;
+  const float* c = values_.data() + locate(clamped, &f);
+  const size_t dy = static_cast<size_t>(dims_.x()), dz = dy * static_cast<size_t>(dims_.y());
+  const float c000 = c[0], c100 = c[1], c010 = c[dy], c110 = c[dy + 1];
+  const float c001 = c[dz], c101 = c[dz + 1], c011 = c[dz + dy], c111 = c[dz + dy + 1];
+  const float fx = f.x(), fy = f.y(), fz = f.z(), gy = 1 - fy, gz = 1 - fz;
+  // The trilinear interpolant and its analytic gradient, sharing the edge differences.
+  const float x00 = c100 - c000, x10 = c110 - c010, x01 = c101 - c001, x11 = c111 - c011;
+  const float e00 = c000 + fx * x00, e10 = c010 + fx * x10, e01 = c001 + fx * x01, e11 = c011 + fx * x11;
+  const float y0 = e10 - e00, y1 = e11 - e01;
+  const float f0 = e00 + fy * y0, f1 = e01 + fy * y1;
+  const float d = f0 + fz * (f1 - f0);
+  Vec3 grad(gz * (gy * x00 + fy * x10) + fz * (gy * x01 + fy * x11), gz * y0 + fz * y1, f1 - f0);
+  grad *= invCell_;
+  if (extra2 > 0.0f) {
+    // Beyond the grid the distance grows along the way out.
+    const float extra = std::sqrt(extra2);
+    grad += outside / extra * std::max(1.0f, grad.norm());
+    *gradient = grad;
+    return d + extra;
   }
-  const float c000 = at(i[0], i[1], i[2]), c100 = at(i[0] + 1, i[1], i[2]);
-  const float c010 = at(i[0], i[1] + 1, i[2]), c110 = at(i[0] + 1, i[1] + 1, i[2]);
-  const float c001 = at(i[0], i[1], i[2] + 1), c101 = at(i[0] + 1, i[1], i[2] + 1);
-  const float c011 = at(i[0], i[1] + 1, i[2] + 1), c111 = at(i[0] + 1, i[1] + 1, i[2] + 1);
-  const float fx = f[0], fy = f[1], fz = f[2], gx = 1 - fx, gy = 1 - fy, gz = 1 - fz;
-  float d = gz * (gy * (gx * c000 + fx * c100) + fy * (gx * c010 + fx * c110)) +
-            fz * (gy * (gx * c001 + fx * c101) + fy * (gx * c011 + fx * c111));
-  Vec3 grad((gz * (gy * (c100 - c000) + fy * (c110 - c010)) + fz * (gy * (c101 - c001) + fy * (c111 - c011))),
-            (gz * (gx * (c010 - c000) + fx * (c110 - c100)) + fz * (gx * (c011 - c001) + fx * (c111 - c101))),
-            (gy * (gx * (c001 - c000) + fx * (c101 - c100)) + fy * (gx * (c011 - c010) + fx * (c111 - c110))));
-  grad /= cell_;
-  // Beyond the grid the distance grows along the way out.
-  if (extra > 0.0f) grad += outside / extra * std::max(1.0f, grad.norm());
   *gradient = grad;
-  return d + extra;
+  return d;
 }
 
 Vec3 SdfGrid::gradient(const Vec3& p) const {

@@ -35,10 +35,15 @@ class SdfGrid {
 
  private:
   float at(int x, int y, int z) const { return values_[(static_cast<size_t>(z) * dims_.y() + y) * dims_.x() + x]; }
+  // The grid cell holding p (clamped to the grid): the index of its lowest corner and p's
+  // fractional position in it.
+  size_t locate(const Vec3& clamped, Vec3* fraction) const;
   float trilinear(const Vec3& p) const;
 
   Vec3 origin_ = Vec3::Zero();
+  Vec3 max_ = Vec3::Zero();  // the last grid point (bounds().max), kept for the per-query clamp
   float cell_ = 1.0f;
+  float invCell_ = 1.0f;
   Eigen::Vector3i dims_ = Eigen::Vector3i::Zero();
   std::vector<float> values_;
 };
