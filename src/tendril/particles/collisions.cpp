@@ -46,12 +46,37 @@ void closestSegmentPoints(const Vec3& p1, const Vec3& q1, const Vec3& p2, const 
 }  // namespace
 
 void ParticleWorld::collideObstacles(const env::Environment& env) {
-  correction_.assign(capacity(), Vec3::Zero());
+  const size_t n = capacity();
+  correction_.assign(n, Vec3::Zero());
   if (env.obstacleCount() == 0) return;
+  // The distances proved by earlier samples hold only for the same obstacles in the same place.
+  bool same = clearanceEnv_ == &env && clearanceObstacles_.size() == env.obstacleCount();
+  clearanceObstacles_.resize(env.obstacleCount());
+  for (uint32_t o = 0; o < env.obstacleCount(); ++o) {
+    const env::ObstacleInfo& info = env.obstacle(o);
+    ObstacleState& state = clearanceObstacles_[o];
+    same = same && state.worldFromLocal.rotation.coeffs() == info.worldFromLocal.rotation.coeffs() &&
+           state.worldFromLocal.translation == info.worldFromLocal.translation &&
+           state.localBounds.min == info.localBounds.min && state.localBounds.max == info.localBounds.max &&
+           state.triangles == info.triangles;
+    state = {info.worldFromLocal, info.localBounds, info.triangles};
+  }
+  clearanceEnv_ = &env;
+  if (!same) clearance_.assign(n, Clearance{});
+  clearance_.resize(n);
+
+  // The trilinear distance field is Lipschitz with constant √3 (each partial derivative is a
+  // mix of grid differences of a true distance, at most 1; beyond the grid and in the minimum
+  // over obstacles it stays so): a point δ from a sampled one lies at least d − √3 δ from any
+  // obstacle. A particle whose three samples cannot reach its radius this way would get no push
+  // from sampling, so it is not sampled; the margin covers rounding.
+  constexpr float kLipschitz = 1.7321f, kMargin = 1e-4f;
+  constexpr float kUnknown = -std::numeric_limits<float>::infinity();
+
   // The particle is a capsule along its long axis: test its centre and both ends against the
   // SDF (the paper tests the distance against the longest axis) and push the whole particle
   // out along the surface normal. The push is kept for the velocity response in integrate().
-  parallelFor(0, capacity(), [&](size_t i) {
+  parallelFor(0, n, [&](size_t i) {
     if (!(flags_[i] & kActive) || (flags_[i] & kRoot)) return;
     // Fast particles (a fall, a hard drag) could pass through a thin obstacle between two
     // steps, where no distance sample sees it: their path is cast as a ray first.
@@ -67,19 +92,36 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
       }
     }
     const Vec3 axis = qp_[i] * Vec3(0, a_[i], 0);
+    Clearance& clear = clearance_[i];
+    const float movedCentre = (xp_[i] - clear.centre).norm();
+    const float movedEnds = movedCentre + (axis - clear.axis).norm();
+    if (clear.centreDistance - kLipschitz * movedCentre > a_[i] + b_[i] + kMargin ||
+        clear.distance - kLipschitz * movedEnds > b_[i] + kMargin)
+      return;
     const Vec3 samples[3] = {xp_[i], xp_[i] + axis, xp_[i] - axis};
     Vec3 push = Vec3::Zero();
+    float centre = kUnknown, nearest = kUnknown;
     for (int k = 0; k < 3; ++k) {
       Vec3 g;
       const float d = env.signedDistance(samples[k] + push, &g);
-      // A centre farther than the half-length plus the radius: the ends are clear as well.
-      if (k == 0 && d > a_[i] + b_[i]) break;
+      if (k == 0) {
+        centre = nearest = d;
+        // A centre farther than the half-length plus the radius: the ends are clear as well.
+        if (d > a_[i] + b_[i]) {
+          nearest = d - kLipschitz * a_[i];  // what the ends are known to keep
+          break;
+        }
+      }
+      nearest = std::min(nearest, d);
       const float depth = b_[i] - d;
       if (depth > 0.0f && g.squaredNorm() > 0.0f) push += g * depth;
     }
     if (push.squaredNorm() > 0.0f) {
       xp_[i] += push;
       correction_[i] += push;
+      clear = Clearance{};  // sampled at points it has now left
+    } else {
+      clear = {samples[0], axis, centre, nearest};
     }
   }, 256);
 }

@@ -73,24 +73,40 @@ void ParticleWorld::applyAnchors(const env::Environment& env) {
 
 void ParticleWorld::shapeMatch() {
   const size_t n = capacity();
-  groupCenter_.resize(n);
-  groupRestCenter_.resize(n);
 
   // Every connected piece (a plant, or a piece broken off it) is matched on its own, from its
   // root outward (Gauss–Seidel): a group is fitted once its parent has reached its goal, so the
   // root's hold reaches the tips within one pass instead of creeping outward over many steps.
-  // Pieces never share particles, so they run in parallel with results independent of the
-  // thread count.
-  pieceStart_.clear();
-  pieceOrder_.clear();
-  for (uint32_t r = 0; r < n; ++r) {
-    if (!(flags_[r] & kActive) || parent_[r] != kNone) continue;
+  // A particle's fit reads only its parent (already moved in this pass), itself and its
+  // children (moved in the last pass), never its siblings: the result does not depend on the
+  // order of siblings, and pieces, which never share particles, run in parallel with results
+  // independent of the thread count.
+  if (pieceOrderVersion_ != topologyVersion_) {
+    pieceOrderVersion_ = topologyVersion_;
+    pieceStart_.clear();
+    pieceOrder_.clear();
+    matchParent_.clear();
+    matchChildBegin_.clear();
+    matchChildEnd_.clear();
+    for (uint32_t r = 0; r < n; ++r) {
+      if (!(flags_[r] & kActive) || parent_[r] != kNone) continue;
+      pieceStart_.push_back(uint32_t(pieceOrder_.size()));
+      pieceOrder_.push_back(r);
+      matchParent_.push_back(kNone);
+      for (size_t k = pieceOrder_.size() - 1; k < pieceOrder_.size(); ++k) {
+        matchChildBegin_.push_back(uint32_t(pieceOrder_.size()));
+        for (uint32_t c = firstChild_[pieceOrder_[k]]; c != kNone; c = nextSibling_[c]) {
+          pieceOrder_.push_back(c);
+          matchParent_.push_back(uint32_t(k));
+        }
+        matchChildEnd_.push_back(uint32_t(pieceOrder_.size()));
+      }
+    }
     pieceStart_.push_back(uint32_t(pieceOrder_.size()));
-    pieceOrder_.push_back(r);
-    for (size_t k = pieceOrder_.size() - 1; k < pieceOrder_.size(); ++k)
-      for (uint32_t c = firstChild_[pieceOrder_[k]]; c != kNone; c = nextSibling_[c]) pieceOrder_.push_back(c);
   }
-  pieceStart_.push_back(uint32_t(pieceOrder_.size()));
+  const size_t count = pieceOrder_.size();
+  matchNode_.resize(count);
+  matchRest_.resize(count);
 
   // A plant's root is held in place and orientation. In its groups it counts as much heavier,
   // so that it fixes their rotation as well as their position — otherwise a two-particle group
@@ -103,109 +119,137 @@ void ParticleWorld::shapeMatch() {
     if ((flags_[i] & kLeaf) && parent_[i] != kNone) return std::min(m_[i], m_[parent_[i]]);
     return m_[i];
   };
-  auto member = [&](uint32_t i, auto&& visit) {
-    // A group: the particle, its parent and its children (all currently connected).
-    visit(i);
-    if (parent_[i] != kNone) visit(parent_[i]);
-    for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) visit(c);
-  };
-  // Eq. 14–15 for the group of g: its optimal rotation (robust extraction) and its centres.
-  auto fitGroup = [&](uint32_t g) {
-    float mass = 0.0f;
-    Vec3 c = Vec3::Zero(), cr = Vec3::Zero();
-    member(g, [&](uint32_t i) {
-      const float m = matchMass(i);
-      mass += m;
-      c += m * xp_[i];
-      cr += m * xr_[i];
-    });
-    c /= mass;
-    cr /= mass;
-    Mat3 A = Mat3::Zero();
-    member(g, [&](uint32_t i) {
-      // Eq. 14's point terms, centred on the group, plus the ellipsoids' own moments.
-      A += ellipsoidMoment_[i] + matchMass(i) * (xp_[i] - c) * (xr_[i] - cr).transpose();
-    });
-    // Warm-started from the last fit, one iteration of the extraction per pass tracks the
-    // rotation (each step makes `iterations` passes).
-    groupRotation_[g] = extractRotation(A, groupRotation_[g], 1);
-    groupCenter_[g] = c;
-    groupRestCenter_[g] = cr;
-  };
-
   // Eq. 15, the ellipsoid's own moment: A_i = m/5 · R_i diag(b², a², b²) R̄_iᵀ (the garbled
   // extraction reads "1/5 m diag(a², b², c²) R"; with both a current and a rest orientation the
-  // moment is this product — Müller & Chentanez 2011, eq. 9), written as
-  // bb R R̄ᵀ + (aa − bb) r_y r̄_yᵀ. Kept per particle and renewed whenever it turns.
-  ellipsoidMoment_.resize(n);
-  auto updateMoment = [&](uint32_t i) {
-    const Mat3 R = qp_[i].toRotationMatrix();
+  // moment is this product — Müller & Chentanez 2011, eq. 9). The part after R_i is fixed during
+  // a step; R_i is renewed whenever the particle turns.
+  // Everything else that does not move within a step is gathered here once: masses, rest
+  // offsets, eq. 4's weights, the stiffness and the anchor pull.
+  parallelFor(0, count, [&](size_t k) {
+    const uint32_t i = pieceOrder_[k];
+    MatchRest& r = matchRest_[k];
+    r.parent = matchParent_[k];
+    r.childBegin = matchChildBegin_[k];
+    r.childEnd = matchChildEnd_[k];
+    r.qr = qr_[i];
+    r.matchMass = matchMass(i);
+    const float bb = r.matchMass / 5.0f * b_[i] * b_[i], aa = r.matchMass / 5.0f * a_[i] * a_[i];
     const Mat3 Rr = qr_[i].toRotationMatrix();
-    const float k = matchMass(i) / 5.0f, bb = k * b_[i] * b_[i], aa = k * a_[i] * a_[i];
-    ellipsoidMoment_[i] = bb * (R * Rr.transpose()) + (aa - bb) * R.col(1) * Rr.col(1).transpose();
-  };
-  parallelFor(0, n, [&](size_t i) {
-    if (flags_[i] & kActive) updateMoment(uint32_t(i));
-  }, 2048);
+    r.restMoment.row(0) = bb * Rr.col(0).transpose();
+    r.restMoment.row(1) = aa * Rr.col(1).transpose();
+    r.restMoment.row(2) = bb * Rr.col(2).transpose();
+    // The group {parent, self, children}: its mass and rest centre (eq. 14's c̄).
+    float mass = r.matchMass;
+    Vec3 cr = r.matchMass * xr_[i];
+    const uint32_t p = parent_[i];
+    if (p != kNone) {
+      mass += matchMass(p);
+      cr += matchMass(p) * xr_[p];
+    }
+    for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) {
+      mass += matchMass(c);
+      cr += matchMass(c) * xr_[c];
+    }
+    r.invGroupMass = 1.0f / mass;
+    r.restOffset = xr_[i] - cr * r.invGroupMass;
+    // Eq. 4: its parent's group weighs more than its own, so particles follow their parents.
+    const float own = kOwnGroupWeight * m_[i], parentW = p != kNone ? kParentGroupWeight * m_[p] : 0.0f;
+    r.ownWeight = own / (own + parentW);
+    r.parentWeight = parentW / (own + parentW);
+    r.fromParent = p != kNone ? Vec3(xr_[i] - xr_[p]) : Vec3::Zero();
+    r.stiffness = stiffnessOf(i);
+    r.phi = (flags_[i] & kAnchored) ? anchorPhi_[i] : 0.0f;
+    r.anchor = anchor_[i];
+    MatchNode& node = matchNode_[k];
+    node.x = xp_[i];
+    node.q = qp_[i];
+    node.rotation = groupRotation_[i];
+    node.frame = qp_[i] * qr_[i].conjugate();
+    node.moment = qp_[i].toRotationMatrix() * r.restMoment;
+  }, 1024);
 
   const int iterations = std::max(1, settings_.iterations);
+  const uint32_t drag = dragParticle_;
   parallelFor(0, pieceStart_.size() - 1, [&](size_t piece) {
+    const uint32_t begin = pieceStart_[piece], end = pieceStart_[piece + 1];
     for (int iteration = 0; iteration < iterations; ++iteration) {
-      for (uint32_t k = pieceStart_[piece]; k < pieceStart_[piece + 1]; ++k) {
+      for (uint32_t k = begin; k < end; ++k) {
+        const MatchRest& r = matchRest_[k];
+        MatchNode& node = matchNode_[k];
         const uint32_t i = pieceOrder_[k];
-        fitGroup(i);
         if (flags_[i] & kRoot) {
-          xp_[i] = xr_[i];
-          qp_[i] = qr_[i];
+          node.x = xr_[i];
+          node.q = r.qr;
+          node.frame = Quat::Identity();
+          node.moment = r.qr.toRotationMatrix() * r.restMoment;
           continue;
         }
-        // Eq. 3–4: the goal is the weighted sum of the targets of the groups the particle is
-        // in — its parent's (fitted after the parent moved) weighing more than its own.
-        Vec3 sum = Vec3::Zero();
-        float weight = 0.0f;
-        auto target = [&](uint32_t g, float role) {
-          const float w = role * m_[g];
-          sum += w * (groupRotation_[g] * (xr_[i] - groupRestCenter_[g]) + groupCenter_[g]);  // eq. 3
-          weight += w;
-        };
-        target(i, kOwnGroupWeight);
-        if (const uint32_t p = parent_[i]; p != kNone) {
-          // The parent has already reached its goal: its group's target for this particle is
-          // taken in the parent's own frame (an oriented particle carries its rotation,
-          // R_p = q_p q̄_p⁻¹), which holds a chain straight where a three-point fit could bend.
-          const float w = kParentGroupWeight * m_[p];
-          const Quat Rp = qp_[p] * qr_[p].conjugate();
-          sum += w * (Rp * (xr_[i] - xr_[p]) + xp_[p]);
-          weight += w;
+        // Eq. 14–15 for the group of k: A = Σ A_j + Σ m_j (x_j − c)(x̄_j − c̄)ᵀ. As Σ m_j (x̄_j − c̄)
+        // is zero, x_j − c may be replaced by x_j − x_k: this particle's own point term drops
+        // out, and positions are differences of nearby points, exact far from the origin.
+        Mat3 A = node.moment;
+        Vec3 offset = Vec3::Zero();  // Σ m_j (x_j − x_k)
+        if (r.parent != kNone) {
+          const MatchNode& pn = matchNode_[r.parent];
+          const float m = matchRest_[r.parent].matchMass;
+          const Vec3 d = m * (pn.x - node.x);
+          A += pn.moment + d * (r.restOffset - r.fromParent).transpose();
+          offset += d;
         }
-        const Vec3 xg = sum / weight;  // eq. 4
-        const float s = stiffnessOf(i);
-        Vec3 x = xp_[i] + s * (xg - xp_[i]);  // x'_g = x_p + s (x_g − x_p), §4.3
+        for (uint32_t c = r.childBegin; c < r.childEnd; ++c) {
+          const MatchNode& cn = matchNode_[c];
+          const MatchRest& cr = matchRest_[c];
+          const Vec3 d = cr.matchMass * (cn.x - node.x);
+          A += cn.moment + d * (cr.fromParent + r.restOffset).transpose();
+          offset += d;
+        }
+        const Vec3 center = node.x + offset * r.invGroupMass;
+        // Warm-started from the last fit, one iteration of the extraction per pass tracks the
+        // rotation (each step makes `iterations` passes).
+        node.rotation = extractRotation(A, node.rotation, 1);
+
+        // Eq. 3–4: the goal is the weighted sum of the targets of the groups the particle is
+        // in — its own (eq. 3: R (x̄ − c̄) + c) and its parent's, which weighs more. The parent
+        // has already reached its goal: its group's target for this particle is taken in the
+        // parent's own frame (an oriented particle carries its rotation, R_p = q_p q̄_p⁻¹), which
+        // holds a chain straight where a three-point fit could bend.
+        Vec3 xg = r.ownWeight * (node.rotation * r.restOffset + center);
         // Orientation: the own group's rotation applied to the rest orientation (MC11), blended
         // by the same stiffness (normalised lerp: the two are close within one step).
         // With a parent, its rotation joins in with the same weights as for the position.
-        Quat rotation = groupRotation_[i];
-        if (const uint32_t p = parent_[i]; p != kNone) {
-          Quat Rp = qp_[p] * qr_[p].conjugate();
+        Quat rotation = node.rotation;
+        if (r.parent != kNone) {
+          const MatchNode& pn = matchNode_[r.parent];
+          xg += r.parentWeight * (pn.frame * r.fromParent + pn.x);
+          Quat Rp = pn.frame;
           if (Rp.coeffs().dot(rotation.coeffs()) < 0.0f) Rp.coeffs() = -Rp.coeffs();
-          const float wp = kParentGroupWeight * m_[p], wo = kOwnGroupWeight * m_[i];
-          rotation.coeffs() = wo * rotation.coeffs() + wp * Rp.coeffs();
+          rotation.coeffs() = r.ownWeight * rotation.coeffs() + r.parentWeight * Rp.coeffs();
           rotation.normalize();
         }
-        Quat qg = rotation * qr_[i];
-        if (qg.coeffs().dot(qp_[i].coeffs()) < 0.0f) qg.coeffs() = -qg.coeffs();
+        const float s = r.stiffness;
+        Vec3 x = node.x + s * (xg - node.x);  // x'_g = x_p + s (x_g − x_p), §4.3
+        Quat qg = rotation * r.qr;
+        if (qg.coeffs().dot(node.q.coeffs()) < 0.0f) qg.coeffs() = -qg.coeffs();
         Quat q;
-        q.coeffs() = (1.0f - s) * qp_[i].coeffs() + s * qg.coeffs();
+        q.coeffs() = (1.0f - s) * node.q.coeffs() + s * qg.coeffs();
         q.normalize();
-        if (i == dragParticle_) x += dragStrength_ * (dragTarget_ - x);
+        if (i == drag) x += dragStrength_ * (dragTarget_ - x);
         // Eq. 5 after the shape: x'_p = x_p + φ (x_anchor − x_p) (see applyAnchors()).
-        if (flags_[i] & kAnchored) x += anchorPhi_[i] * (anchor_[i] - x);
-        xp_[i] = x;
-        qp_[i] = q;
-        updateMoment(i);
+        x += r.phi * (r.anchor - x);
+        node.x = x;
+        node.q = q;
+        node.frame = q * r.qr.conjugate();
+        node.moment = q.toRotationMatrix() * r.restMoment;
       }
     }
   }, 1);
+
+  parallelFor(0, count, [&](size_t k) {
+    const uint32_t i = pieceOrder_[k];
+    xp_[i] = matchNode_[k].x;
+    qp_[i] = matchNode_[k].q;
+    groupRotation_[i] = matchNode_[k].rotation;
+  }, 2048);
 }
 
 void ParticleWorld::integrate() {

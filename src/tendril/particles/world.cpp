@@ -14,6 +14,7 @@ namespace tendril::particles {
 ParticleWorld::ParticleWorld(WorldSettings settings) : settings_(settings) {}
 
 uint32_t ParticleWorld::allocate() {
+  ++topologyVersion_;
   uint32_t i;
   if (!freeList_.empty()) {
     // Reuse the lowest free slot, so slot order does not depend on the order pieces died in.
@@ -45,6 +46,7 @@ uint32_t ParticleWorld::allocate() {
 }
 
 void ParticleWorld::release(uint32_t i) {
+  ++topologyVersion_;
   // Children become roots of their own (detached) pieces.
   for (uint32_t c = firstChild_[i]; c != kNone;) {
     uint32_t next = nextSibling_[c];
@@ -64,6 +66,7 @@ void ParticleWorld::release(uint32_t i) {
 }
 
 void ParticleWorld::link(uint32_t parent, uint32_t child) {
+  ++topologyVersion_;
   parent_[child] = parent;
   nextSibling_[child] = kNone;
   // Append, so children stay in creation order.
@@ -79,6 +82,7 @@ void ParticleWorld::link(uint32_t parent, uint32_t child) {
 void ParticleWorld::unlink(uint32_t child) {
   uint32_t p = parent_[child];
   if (p == kNone) return;
+  ++topologyVersion_;
   if (firstChild_[p] == child) {
     firstChild_[p] = nextSibling_[child];
   } else {

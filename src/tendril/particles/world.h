@@ -196,10 +196,48 @@ class ParticleWorld {
   std::vector<AttachedLeaf> leaves_;
 
   // Scratch for the parallel passes.
-  std::vector<Vec3> groupCenter_, groupRestCenter_, goal_, correction_;
-  std::vector<Quat> goalRotation_;
-  std::vector<Mat3> ellipsoidMoment_;
-  std::vector<uint32_t> pieceStart_, pieceOrder_;  // connected pieces, each root first (BFS)
+  std::vector<Vec3> goal_, correction_;
+  // Obstacle collisions: what the last distance samples of each particle proved about the
+  // field around it, valid while the obstacles stay where they were (see collideObstacles()).
+  struct Clearance {
+    Vec3 centre = Vec3::Zero(), axis = Vec3::Zero();  // where it was sampled
+    float centreDistance = -std::numeric_limits<float>::infinity();  // field at the centre
+    float distance = -std::numeric_limits<float>::infinity();        // lower bound at the three samples
+  };
+  struct ObstacleState {
+    RigidTransform worldFromLocal;
+    Bounds3 localBounds;
+    size_t triangles = 0;
+  };
+  std::vector<Clearance> clearance_;
+  std::vector<ObstacleState> clearanceObstacles_;
+  const env::Environment* clearanceEnv_ = nullptr;
+  // Shape matching runs on copies of the particles in piece order: connected pieces one after
+  // the other, each root first and breadth first, so that a particle's parent comes before it
+  // and its children are contiguous. The order is rebuilt only when the topology changes.
+  struct MatchNode {   // rewritten by every pass
+    Vec3 x;            // predicted position x_p
+    Quat q;            // predicted orientation q_p
+    Quat rotation;     // its group's rotation R (warm start of the extraction)
+    Quat frame;        // q_p q̄⁻¹: the particle's own rotation, its children's parent frame
+    Mat3 moment;       // eq. 15's ellipsoid moment R_i · restMoment
+  };
+  struct MatchRest {   // fixed during a step
+    Vec3 restOffset = Vec3::Zero();  // x̄ − c̄ of its own group
+    Vec3 fromParent = Vec3::Zero();  // x̄ − x̄_parent
+    Quat qr = Quat::Identity();
+    Mat3 restMoment = Mat3::Zero();  // m/5 · diag(b², a², b²) R̄ᵀ
+    float matchMass = 0, invGroupMass = 0;
+    float ownWeight = 1, parentWeight = 0;  // eq. 4's weights of its own and its parent's group, normalised
+    float stiffness = 1, phi = 0;           // §4.3 stiffness; eq. 5 anchor pull (0: none)
+    Vec3 anchor = Vec3::Zero();
+    uint32_t parent = kNone, childBegin = 0, childEnd = 0;  // in piece order
+  };
+  std::vector<uint32_t> pieceStart_, pieceOrder_;  // piece order: slot of each entry, pieces' starts
+  std::vector<uint32_t> matchParent_, matchChildBegin_, matchChildEnd_;
+  std::vector<MatchNode> matchNode_;
+  std::vector<MatchRest> matchRest_;
+  uint64_t topologyVersion_ = 0, pieceOrderVersion_ = ~uint64_t(0);  // links changed / order built for
   std::vector<uint32_t> hashParticles_, hashBucket_, hashStart_, hashEntries_;
   float hashInv_ = 0.0f;  // 1 / cell size of the spatial hash
 
