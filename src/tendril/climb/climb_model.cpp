@@ -41,15 +41,18 @@ class ClimbPlantSystem final : public models::PlantSystem {
     def.direction = spec.direction;
     def.seed = spec.seed;
     system_.addPlant(def, env);
+    growthFlow_.push_back(def.species.growthFlow);
   }
   void step(const env::Environment& env) override { system_.step(env); }
   bool finished() const override { return system_.finished(); }
   size_t plantCount() const override { return system_.plantCount(); }
   plant::PlantModel snapshot(size_t plant) const override { return system_.snapshot(uint32_t(plant)); }
   size_t segmentCount() const override { return system_.stats().segments; }
+  wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return growthFlow_[plant]; }
 
  private:
   ClimbSystem system_;
+  std::vector<wind::GrowthFlowSpecies> growthFlow_;
 };
 
 std::shared_ptr<const scene::ModelParams> readClimbPlant(JsonObject& o, const std::filesystem::path& baseDir) {

@@ -28,6 +28,7 @@ class ParticlePlantSystem final : public models::PlantSystem {
   size_t plantCount() const override { return world_.plantCount(); }
   plant::PlantModel snapshot(size_t plant) const override { return world_.snapshot(uint32_t(plant)); }
   size_t segmentCount() const override { return world_.particleCount(); }
+  wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return world_.species(uint32_t(plant)).growthFlow; }
   ParticleWorld& world() { return world_; }
   const ParticleWorld& world() const { return world_; }
 

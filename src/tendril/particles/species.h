@@ -6,6 +6,7 @@
 
 #include "tendril/core/math.h"
 #include "tendril/plant/plant_model.h"
+#include "tendril/wind/growth_flow.h"
 
 #include <string>
 #include <vector>
@@ -80,6 +81,9 @@ struct ParticleSpecies {
   int leafParticleLimit = 10000;             // below this many particles, leaves are particles
 
   plant::BarkMaterial bark;
+
+  // How growth answers the wind (seed 001, Growth-Flow). See docs/wind.md.
+  wind::GrowthFlowSpecies growthFlow;
 };
 
 // Reads the fields present in `o` over `s` (absent fields keep their value). Strict: unknown

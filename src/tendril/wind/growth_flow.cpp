@@ -7,8 +7,7 @@
 
 namespace tendril::wind {
 
-GrowthFlowSpecies GrowthFlowSpecies::read(JsonObject& o) {
-  GrowthFlowSpecies s;
+void readGrowthFlow(JsonObject& o, GrowthFlowSpecies& s) {
   s.windMin = o.numberf("wind_min", s.windMin, 0.0, 100.0);
   s.windMax = o.numberf("wind_max", s.windMax, 0.0, 200.0);
   if (s.windMax <= s.windMin) throw o.error("wind_max", "must be greater than wind_min");
@@ -39,7 +38,6 @@ GrowthFlowSpecies GrowthFlowSpecies::read(JsonObject& o) {
   s.leafMass = o.numberf("leaf_mass", s.leafMass, 0.0, 10.0);
   s.maxSwayAngle = o.angle("max_sway_angle", degrees(s.maxSwayAngle), 0.0, 90.0);
   o.finish();
-  return s;
 }
 
 float windGrowthFactor(float w, float wMin, float wMax) {
@@ -90,22 +88,20 @@ GrowthFlowStep growthStep(float w, const GrowthFlowSpecies& s) {
   return g;
 }
 
-Vec3 turnTowardWind(const Vec3& direction, const Vec3& wind, const GrowthFlowStep& step, float& angle) {
-  if (!step.active() || step.angleGrowth <= 0.0f) return direction;
+float nextGrowthAngle(float angle, const GrowthFlowStep& step) {
+  if (!step.active()) return angle;
+  return std::min(angle * (1.0f + step.angleGrowth), kPi);  // eq. 9, α_t = α_{t−1} (1 + Δα)
+}
+
+Vec3 windGrowthDirection(const Vec3& direction, const Vec3& wind, float angle) {
   float speed = wind.norm();
-  if (speed <= 0.0f) return direction;
-  // eq. 9 step by step: α_t = α_{t−1} (1 + Δα); the shoot turns by the increase. A shoot
-  // cannot turn more than half a turn in all, which also keeps α finite.
-  float next = std::min(angle * (1.0f + step.angleGrowth), kPi);
-  float increase = next - angle;
-  angle = next;
+  if (speed <= 0.0f || angle <= 0.0f) return direction;
   Vec3 w = wind / speed;
   Vec3 u = direction.cross(w);  // Algorithm 1: u = b × w
   float s = u.norm();
   if (s < 1e-6f) return direction;  // already along (or against) the wind
-  float toWind = std::atan2(s, direction.dot(w));  // §3.1.1: never past the wind direction
-  float turn = std::min(increase, toWind);
-  return (Eigen::AngleAxisf(turn, u / s) * direction).normalized();
+  float toWind = std::atan2(s, direction.dot(w));
+  return (Eigen::AngleAxisf(std::min(angle, toWind), u / s) * direction).normalized();
 }
 
 bool leafDetaches(float w, const GrowthFlowSpecies& s) {

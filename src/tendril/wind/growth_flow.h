@@ -42,17 +42,18 @@ struct GrowthFlowSpecies {
   float radiusSensitivity = 0.5f;  // s_r ∈ [0, 1]
   // eq. 8: normal elongation factor g_l is the model's own (e.g. the climbing decrease ratio);
   // s_l is the sensitivity, l_max the cap (m; 0 = the model's own maximum).
-  float lengthSensitivity = 0.3f;  // s_l ∈ [0, 1]
+  float lengthSensitivity = 0.03f;  // s_l ∈ [0, 1]
   float maxLength = 0.0f;
-  // eq. 9: growth angle toward the wind. α0 is the angle a shoot turns toward the wind in its
-  // first unit of growth time at f = 1 when c_α s_α = 1; c_α converts m/s to degrees per second.
-  float angle0 = radians(0.5f);      // α0 (rad)
-  float angleConversion = 0.02f;     // c_α (per m/s, per unit growth time)
+  // eq. 9: growth angle toward the wind, α_t = α0 (1 + c_α s_α f)^t; a shoot turns by its
+  // increase each unit of growth time. (The paper's c_α converts m/s to degrees per second; with
+  // f(w) dimensionless it is a plain rate here.)
+  float angle0 = radians(2.0f);      // α0 (rad)
+  float angleConversion = 0.2f;      // c_α (per unit growth time)
   float angleSensitivity = 0.5f;     // s_α ∈ [0, 1]
   // eq. 16–17: leaf thickness and leaf radius.
   float leafThicknessRate = 0.01f;        // g_h
   float leafThicknessSensitivity = 0.5f;  // s_h ∈ [0, 1]
-  float leafRadiusSensitivity = 0.3f;     // s_d ∈ [0, 1]
+  float leafRadiusSensitivity = 0.02f;    // s_d ∈ [0, 1]
   // Algorithm 2: a leaf detaches when w > c_p t_p or w > c_b t_b (t: tensile strengths).
   float petioleStrength = 1.0f;    // t_p
   float bladeStrength = 1.2f;      // t_b
@@ -75,9 +76,11 @@ struct GrowthFlowSpecies {
   float leafMass = 0.002f;  // kg per leaf for the drag it adds (branch mass = 10 × this per node)
   float maxSwayAngle = radians(20.0f);  // per node, on top of the limit acos(b·w) of §3.1.1
 
-  // Reads the "growth_flow" object of a species file (every key optional; angles in degrees).
-  static GrowthFlowSpecies read(JsonObject& o);
 };
+
+// Reads the "growth_flow" object of a species file into `s` (every key optional, keeping the
+// value in `s`; angles in degrees).
+void readGrowthFlow(JsonObject& o, GrowthFlowSpecies& s);
 
 // eq. 6.
 float windGrowthFactor(float windSpeed, float windMin, float windMax);
@@ -103,10 +106,12 @@ struct GrowthFlowStep {
 };
 GrowthFlowStep growthStep(float windSpeed, const GrowthFlowSpecies& s);
 
-// Algorithm 1's last step for a growing tip: `angle` is its accumulated growth angle α (start
-// it at angle0); it grows by eq. 9 and the tip direction turns by the increase about
-// u = b × w, never past the wind direction. Returns the new unit direction.
-Vec3 turnTowardWind(const Vec3& direction, const Vec3& wind, const GrowthFlowStep& step, float& angle);
+// eq. 9 one unit of growth time on: α ← α (1 + Δα), at most π.
+float nextGrowthAngle(float angle, const GrowthFlowStep& step);
+// Algorithm 1's rotation: the direction a shoot grows in the wind — its still-air direction b
+// turned by the growth angle α about u = b × w, never past the wind direction (§3.1.1). The
+// shoot keeps its still-air direction (what its tropisms steer) and grows along this one.
+Vec3 windGrowthDirection(const Vec3& direction, const Vec3& wind, float angle);
 
 // Algorithm 2's detachment test.
 bool leafDetaches(float windSpeed, const GrowthFlowSpecies& s);
