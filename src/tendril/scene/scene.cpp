@@ -98,6 +98,24 @@ env::Light readLight(JsonObject& o) {
   return l;
 }
 
+wind::SphSettings readSph(JsonObject& o, bool* fill) {
+  wind::SphSettings s;
+  s.domainMin = o.requiredVec3("domain_min");
+  s.domainMax = o.requiredVec3("domain_max");
+  if (!(s.domainMax.array() > s.domainMin.array()).all())
+    throw o.error("domain_max", "must be greater than domain_min in every coordinate");
+  s.spacing = o.numberf("spacing", s.spacing, 0.005, 10.0);
+  s.restDensity = o.numberf("rest_density", s.restDensity, 1.2, 1.4);
+  s.viscosity = o.numberf("viscosity", s.viscosity, 0.0, 10.0);
+  s.soundSpeed = o.numberf("sound_speed", s.soundSpeed, 0.1, 1000.0);
+  std::string boundary = o.choice("boundary", "outflow", {"outflow", "closed"});
+  s.boundary = boundary == "closed" ? wind::SphBoundary::Closed : wind::SphBoundary::Outflow;
+  s.maxParticles = size_t(o.integer("max_particles", int64_t(s.maxParticles), 1, 100'000'000));
+  *fill = o.boolean("fill", true);
+  o.finish();
+  return s;
+}
+
 env::WindSettings readWind(JsonObject& o) {
   env::WindSettings w;
   std::string mode = o.choice("mode", "constant", {"constant", "gusty", "sph"});
@@ -120,7 +138,6 @@ env::WindSettings readWind(JsonObject& o) {
     e.finish();
     w.emitters.push_back(em);
   }
-  o.finish();
   return w;
 }
 
@@ -195,7 +212,16 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
     }
     for (JsonObject& l : e->objectArray("lights")) scene.lights.push_back(readLight(l));
     for (JsonObject& s : e->objectArray("strokes")) scene.strokes.push_back(readStroke(s));
-    if (auto w = e->optionalObject("wind")) scene.wind = readWind(*w);
+    if (auto w = e->optionalObject("wind")) {
+      scene.wind = readWind(*w);
+      if (auto sph = w->optionalObject("sph")) {
+        if (scene.wind.mode != env::WindMode::Sph) throw w->error("sph", "only applies with \"mode\": \"sph\"");
+        scene.sph = readSph(*sph, &scene.sphFill);
+      } else if (scene.wind.mode == env::WindMode::Sph) {
+        throw w->error("sph", "is required with \"mode\": \"sph\" (the simulated box: domain_min, domain_max)");
+      }
+      w->finish();
+    }
     e->finish();
   }
   std::vector<JsonObject> plants = root.objectArray("plants");

@@ -7,6 +7,7 @@
 #include "tendril/core/json_reader.h"
 #include "tendril/env/environment.h"
 #include "tendril/scene/plant_spec.h"
+#include "tendril/wind/sph.h"
 
 #include <filesystem>
 #include <string>
@@ -37,6 +38,10 @@ struct Scene {
   std::vector<env::Light> lights;
   std::vector<env::Stroke> strokes;
   env::WindSettings wind;
+  // wind.mode == sph: the simulated air (seed 000 §5.3) and whether it starts filled with air
+  // moving at wind.velocity (else only the emitters bring air).
+  wind::SphSettings sph;
+  bool sphFill = true;
   std::vector<PlantSpec> plants;
   OutputSettings output;
 };

@@ -1,6 +1,7 @@
 #include "tendril/session/session.h"
 
 #include "tendril/core/error.h"
+#include "tendril/particles/particle_model.h"
 
 #include <fmt/format.h>
 
@@ -26,11 +27,36 @@ Session::Session(scene::Scene scene) : scene_(std::move(scene)), env_(std::make_
     }
     plants_.push_back({s, systems_[s]->plantCount() - 1});
   }
+  // Simulated air (seed 000 §5.3): the scene's emitters feed it, the wind field samples it.
+  if (scene_.wind.mode == env::WindMode::Sph) {
+    wind::SphSettings settings = scene_.sph;
+    for (const auto& s : systems_)
+      if (auto* p = dynamic_cast<const particles::ParticlePlantSystem*>(s.get())) settings.dt = p->world().settings().dt;
+    air_ = std::make_unique<wind::SphAir>(settings);
+    for (const env::WindEmitter& e : scene_.wind.emitters) {
+      wind::SphEmitter se;
+      se.position = e.position;
+      se.direction = e.direction;
+      se.speed = e.speed;
+      se.rate = e.rate;
+      se.radius = e.radius;
+      air_->addEmitter(se);
+    }
+    if (scene_.sphFill) air_->fillBox(settings.domainMin, settings.domainMax, *env_, scene_.wind.velocity);
+    env_->setAirFlow(air_.get());
+  }
 }
 
 Session::~Session() = default;
 
 void Session::step() {
+  if (air_) {
+    // The air and the particle plants act on each other (two-way coupling), then the plants step.
+    particles::ParticleWorld* world = nullptr;
+    for (auto& s : systems_)
+      if (auto* p = dynamic_cast<particles::ParticlePlantSystem*>(s.get())) world = &p->world();
+    air_->step(*env_, world);
+  }
   for (auto& s : systems_) s->step(*env_);
   ++steps_;
 }

@@ -6,6 +6,7 @@
 #include "tendril/models/registry.h"
 #include "tendril/plant/plant_model.h"
 #include "tendril/scene/scene.h"
+#include "tendril/wind/sph.h"
 
 #include <functional>
 #include <memory>
@@ -51,6 +52,7 @@ class Session {
   std::vector<std::unique_ptr<models::PlantSystem>> systems_;  // one per model in use
   std::vector<std::string> systemModels_;
   std::vector<PlantRef> plants_;  // per scene plant
+  std::unique_ptr<wind::SphAir> air_;  // simulated air (wind mode sph)
   uint32_t steps_ = 0;
 };
 
