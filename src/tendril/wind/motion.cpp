@@ -127,6 +127,7 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
   }
 
   std::vector<float> toWind(n, 0.0f);
+  std::vector<Quat> R(n, Quat::Identity());  // each node's own turn, before the cap below
   // The angle each node turns by: the moment against the segment's spring (eq. 1 balanced by
   // K), eased in and out over the chain's period, toward the wind about u = b × w.
   parallelFor(size_t(0), n, [&](size_t i) {
@@ -150,6 +151,7 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
     angle_[i] = std::min(steady, species_.maxSwayAngle) * ease;
     toWind[i] = std::atan2(s, d.dot(w / speed));  // §3.1.1: acos(b·w / bw)
     axis_[i] = u / s;
+    R[i] = Quat(Eigen::AngleAxisf(angle_[i], axis_[i]));
   });
 
   // Compose parents first: node i's subtree turns about p_i on top of its parent's motion.
@@ -162,13 +164,13 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
     Vec3 Tp = p < 0 ? Vec3::Zero() : T_[size_t(p)];
     float before = p < 0 ? 0.0f : turned[size_t(p)];
     float a = angle_[i];
-    if (a > 0.0f) {
-      a = std::min(a, std::max(0.0f, toWind[i] - before));
+    if (a > 0.0f && a > toWind[i] - before) {  // rare: recompute the capped turn
+      a = std::max(0.0f, toWind[i] - before);
       angle_[i] = a;
+      R[i] = Quat(Eigen::AngleAxisf(a, axis_[i]));
     }
     turned[i] = before + a;
-    Quat R = a > 0.0f ? Quat(Eigen::AngleAxisf(a, axis_[i])) : Quat::Identity();
-    Q_[i] = (Qp * R).normalized();
+    Q_[i] = (Qp * R[i]).normalized();
     T_[i] = Qp * rest_.position[i] + Tp - Q_[i] * rest_.position[i];
   }
 }
@@ -212,29 +214,34 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
     posed.orientation[i] = (Q_[i] * rest_.orientation[i]).normalized();
   });
 
-  posed.leafNode.clear();
-  posed.leafOffset.clear();
-  posed.leafRotation.clear();
-  posed.leafSize.clear();
-  posed.leafThickness.clear();
-  posed.leafPetiole.clear();
-  posed.leafShape.clear();
-  posed.leafMotion.clear();
-  posed.reserve(0, m);
-  for (size_t j = 0; j < m; ++j) {
+  // Leaves still attached, in order, written in parallel.
+  std::vector<uint32_t> kept;
+  kept.reserve(m);
+  for (size_t j = 0; j < m; ++j)
+    if (!leaves_[j].detached) kept.push_back(uint32_t(j));
+  const size_t k = kept.size();
+  posed.leafNode.resize(k);
+  posed.leafOffset.resize(k);
+  posed.leafRotation.resize(k);
+  posed.leafSize.resize(k);
+  posed.leafThickness.resize(k);
+  posed.leafPetiole.resize(k);
+  posed.leafShape.resize(k);
+  posed.leafMotion.resize(k);
+  parallelFor(size_t(0), k, [&](size_t o) {
+    const size_t j = kept[o];
     const LeafMotionState& L = leaves_[j];
-    if (L.detached) continue;
     Quat motion = Quat(Eigen::AngleAxisf(L.twist, Vec3::UnitY())) *
                   Quat(Eigen::AngleAxisf(L.petioleBend + L.vibrate, Vec3::UnitX()));
-    posed.leafNode.push_back(rest_.leafNode[j]);
-    posed.leafOffset.push_back(rest_.leafOffset[j]);
-    posed.leafRotation.push_back((rest_.leafRotation[j] * motion).normalized());
-    posed.leafSize.push_back(rest_.leafSize[j]);
-    posed.leafThickness.push_back(rest_.leafThickness[j]);
-    posed.leafPetiole.push_back(rest_.leafPetiole[j]);
-    posed.leafShape.push_back(rest_.leafShape[j]);
-    posed.leafMotion.push_back(Vec3(L.bladeBend, L.twist, L.vibrate));
-  }
+    posed.leafNode[o] = rest_.leafNode[j];
+    posed.leafOffset[o] = rest_.leafOffset[j];
+    posed.leafRotation[o] = (rest_.leafRotation[j] * motion).normalized();
+    posed.leafSize[o] = rest_.leafSize[j];
+    posed.leafThickness[o] = rest_.leafThickness[j];
+    posed.leafPetiole[o] = rest_.leafPetiole[j];
+    posed.leafShape[o] = rest_.leafShape[j];
+    posed.leafMotion[o] = Vec3(L.bladeBend, L.twist, L.vibrate);
+  }, 1024);
 }
 
 }  // namespace tendril::wind
