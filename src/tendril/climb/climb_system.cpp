@@ -6,6 +6,7 @@
 #include "tendril/core/random.h"
 
 #include <fmt/format.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cmath>
@@ -144,6 +145,7 @@ uint32_t ClimbSystem::addPlant(const ClimbPlantDef& def, const env::Environment&
   tip.radius = s.radius;
   tip.length = s.segmentLength;
   tip.leafSize = s.leafSize;
+  tip.leafThickness = s.leafThickness;
   tip.shootStart = Vec3(s.radius, s.segmentLength, s.leafSize);
   plant->tips.push_back(tip);
   plants_.push_back(std::move(plant));
@@ -174,16 +176,43 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
     return;
   }
 
+  // Growth-Flow (seed 001, Algorithm 1): in a wind above the species' w_min this shoot's
+  // segments grow shorter (eq. 8) and thicker (eq. 7), its leaves smaller (eq. 17) and thicker
+  // (eq. 16), one unit of growth time per segment, and it grows along its still-air direction
+  // turned downwind by eq. 9's growth angle α_t. Calm wind leaves every value untouched.
+  wind::GrowthFlowStep flow;
+  Vec3 windHere = Vec3::Zero();
+  if (!env.windField().settings().calm()) {
+    windHere = env.wind(t.position, float(step_) * stepTime_);
+    flow = wind::growthStep(windHere.norm(), s.growthFlow);
+  }
+  Quat windTurn = Quat::Identity();  // still-air direction -> the direction grown in the wind
+  if (flow.active()) {
+    t.windAngle = wind::nextGrowthAngle(t.windAngle < 0.0f ? s.growthFlow.angle0 : t.windAngle, flow);
+    const Vec3 bent = wind::windGrowthDirection(t.dir, windHere, t.windAngle);
+    windTurn = Quat::FromTwoVectors(t.dir, bent);
+    t.length *= flow.length;
+    if (s.growthFlow.maxLength > 0.0f) t.length = std::min(t.length, s.growthFlow.maxLength);
+    t.radius *= flow.radius;
+    t.leafSize *= flow.leafRadius;
+    t.leafThickness *= flow.leafThickness;
+    if (t.length < s.minLength) {
+      out.dies = true;
+      return;
+    }
+  }
+
   bool avoid = false;
   for (const Rule& r : s.rules) avoid |= r.kind == RuleKind::CollisionAvoidance;
 
   // Program 1: Tip -> segment(Tip) Tip.
-  Vec3 end = t.position + t.dir * t.length;
-  Vec3 dir = t.dir;
+  const Vec3 growDir = flow.active() ? Vec3((windTurn * t.dir).normalized()) : t.dir;
+  Vec3 end = t.position + growDir * t.length;
+  Vec3 dir = growDir;
   std::optional<env::SurfacePoint> endSupport;
   const env::SurfacePoint* hint = t.support ? &*t.support : nullptr;
   if (avoid) {
-    Avoided a = avoidCollisions(env, t.position, t.dir, t.length, s.surfaceOffset, s.adhesionDistance, t.normal, hint);
+    Avoided a = avoidCollisions(env, t.position, growDir, t.length, s.surfaceOffset, s.adhesionDistance, t.normal, hint);
     if (!a.ok) {  // boxed in: nowhere to grow
       out.dies = true;
       return;
@@ -232,7 +261,8 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   const Mat3 frame = node.orientation.toRotationMatrix();
   t.normal = frame.col(2);
   t.position = end;
-  t.dir = dir;
+  // The shoot keeps its still-air direction; the wind's growth angle bends what it grows.
+  t.dir = flow.active() ? Vec3((windTurn.conjugate() * dir).normalized()) : dir;
   t.segments += 1;
   t.support = endSupport;
 
@@ -271,6 +301,8 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
         break;
       case RuleKind::PlaceLeaf: {
         if (s.leafShapes.empty() || t.leafSize <= 0.0f) break;
+        // Algorithm 2: a leaf in a wind beyond its petiole's or blade's strength tears off.
+        if (flow.active() && wind::leafDetaches(windHere.norm(), s.growthFlow)) break;
         Rng lr = rng(kPurposeLeaf);
         // Attachment: the segment end, lifted over the stem's surface along the frame normal.
         const Vec3 attachLocal(0.0f, node.length, node.radius + s.leafLift);
@@ -341,7 +373,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
           leaf.rotation = blades[side].nodeFromLeaf;
           leaf.size = t.leafSize * fitted[side];
           leaf.petiole = s.leafPetiole * fitted[side];
-          leaf.thickness = s.leafThickness;
+          leaf.thickness = t.leafThickness;
           leaf.shape = blades[side].shape;
         }
         if (out.leafCount > 0) node.flags |= plant::kNodeLeafNode;
@@ -355,7 +387,8 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
         // Climbing shoots branch within the surface plane; free ones about a random axis.
         Vec3 axis = climbing ? t.normal : Vec3(dir.cross(br.unitVector()));
         if (axis.squaredNorm() < 1e-8f) axis = anyPerpendicular(dir);
-        Tip b;
+        Tip& b = out.branchTip;  // built in place (a copy trips GCC's maybe-uninitialized on optional)
+        b = Tip{};
         b.position = end;
         b.dir = (axisAngle(axis, angle) * dir).normalized();
         b.normal = t.normal;
@@ -363,12 +396,12 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
         b.radius = b.shootStart.x();
         b.length = b.shootStart.y();
         b.leafSize = b.shootStart.z();
+        b.leafThickness = s.leafThickness;
         b.order = static_cast<uint16_t>(t.order + 1);
         b.unsupported = t.unsupported;
         b.support = endSupport;
         b.startsBranch = true;
         out.branch = true;
-        out.branchTip = b;
         break;
       }
     }
@@ -379,8 +412,12 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
 void ClimbSystem::step(const env::Environment& env) {
   // Gather every live tip of every plant; grow them in parallel into their own outcomes.
   refs_.clear();
-  for (const auto& p : plants_)
+  firstOutcome_.clear();
+  for (const auto& p : plants_) {
+    firstOutcome_.push_back(static_cast<uint32_t>(refs_.size()));
     for (uint32_t i = 0; i < p->tips.size(); ++i) refs_.push_back({p->id, i});
+  }
+  firstOutcome_.push_back(static_cast<uint32_t>(refs_.size()));
   outcomes_.resize(refs_.size());
   parallelFor(0, refs_.size(), [&](size_t i) {
     const Plant& p = *plants_[refs_[i].plant];
@@ -388,38 +425,17 @@ void ClimbSystem::step(const env::Environment& env) {
     growTip(p, p.tips[refs_[i].tip], env, outcomes_[i]);
   }, 8);
 
-  // Merge in tip order: node and tip ids depend only on the order, never on the threads.
-  size_t k = 0;
+  // Merge in tip order: node and tip ids depend only on the order, never on the threads. Each
+  // plant merges its own outcomes (in parallel with the others) while the new segment ends go
+  // into the shared crowding grid, whose counts do not depend on the order of insertion.
+  tbb::parallel_invoke(
+      [&] {
+        for (const Outcome& o : outcomes_)
+          if (o.addNode) occupancy_.insert(o.end);
+      },
+      [&] { parallelFor(0, plants_.size(), [&](size_t i) { mergePlant(*plants_[i], firstOutcome_[i]); }, 1); });
   for (auto& pp : plants_) {
     Plant& p = *pp;
-    std::vector<Tip>& next = nextTips_;
-    next.clear();
-    for (uint32_t i = 0; i < p.tips.size(); ++i, ++k) {
-      Outcome& o = outcomes_[k];
-      int32_t nodeIndex = p.tips[i].lastNode;
-      if (o.addNode) {
-        o.node.parent = p.tips[i].lastNode;
-        nodeIndex = p.model.addNode(o.node);
-        p.birthStep.push_back(step_);
-        occupancy_.insert(o.end);
-        for (int l = 0; l < o.leafCount; ++l) {
-          o.leaves[l].node = nodeIndex;
-          p.model.addLeaf(o.leaves[l]);
-        }
-      }
-      if (o.dies) {
-        if (nodeIndex >= 0) p.model.flags[nodeIndex] |= plant::kNodeDead;
-      } else {
-        o.updated.lastNode = nodeIndex;
-        next.push_back(o.updated);
-      }
-      if (o.branch && nodeIndex >= 0) {
-        o.branchTip.lastNode = nodeIndex;
-        o.branchTip.id = p.nextTipId++;
-        next.push_back(o.branchTip);
-      }
-    }
-    p.tips.swap(next);
     if (!p.capped && p.model.nodeCount() >= size_t(p.def.species.maxSegments)) {
       p.capped = true;
       for (const Tip& t : p.tips)
@@ -431,6 +447,36 @@ void ClimbSystem::step(const env::Environment& env) {
     }
   }
   ++step_;
+}
+
+void ClimbSystem::mergePlant(Plant& p, size_t k) {
+  std::vector<Tip>& next = p.nextTips;
+  next.clear();
+  for (uint32_t i = 0; i < p.tips.size(); ++i, ++k) {
+    Outcome& o = outcomes_[k];
+    int32_t nodeIndex = p.tips[i].lastNode;
+    if (o.addNode) {
+      o.node.parent = p.tips[i].lastNode;
+      nodeIndex = p.model.addNode(o.node);
+      p.birthStep.push_back(step_);
+      for (int l = 0; l < o.leafCount; ++l) {
+        o.leaves[l].node = nodeIndex;
+        p.model.addLeaf(o.leaves[l]);
+      }
+    }
+    if (o.dies) {
+      if (nodeIndex >= 0) p.model.flags[nodeIndex] |= plant::kNodeDead;
+    } else {
+      o.updated.lastNode = nodeIndex;
+      next.push_back(o.updated);
+    }
+    if (o.branch && nodeIndex >= 0) {
+      o.branchTip.lastNode = nodeIndex;
+      o.branchTip.id = p.nextTipId++;
+      next.push_back(o.branchTip);
+    }
+  }
+  p.tips.swap(next);
 }
 
 bool ClimbSystem::finished() const {

@@ -68,6 +68,8 @@ class ClimbSystem {
     Vec3 dir = Vec3::UnitY();
     Vec3 normal = Vec3::UnitZ();  // frame hint: away from the support surface
     float length = 0, radius = 0, leafSize = 0;
+    float leafThickness = 0;
+    float windAngle = -1.0f;  // Growth-Flow's accumulated growth angle α (eq. 9); < 0: not yet in wind
     Vec3 shootStart = Vec3::Zero();  // (radius, length, leaf size) at the shoot's base
     uint32_t segments = 0;
     uint32_t unsupported = 0;  // segments in a row grown without support
@@ -83,6 +85,7 @@ class ClimbSystem {
     plant::PlantModel model;
     std::vector<uint32_t> birthStep;
     std::vector<Tip> tips;
+    std::vector<Tip> nextTips;  // scratch for the merge
     uint64_t nextTipId = 0;
     bool capped = false;
   };
@@ -93,6 +96,8 @@ class ClimbSystem {
   };
 
   void growTip(const Plant& plant, const Tip& tip, const env::Environment& env, Outcome& out) const;
+  // Applies the plant's outcomes, which start at outcomes_[first]: new nodes, leaves and tips.
+  void mergePlant(Plant& plant, size_t first);
 
   uint64_t sceneSeed_;
   float stepTime_;
@@ -101,8 +106,8 @@ class ClimbSystem {
   OccupancyGrid occupancy_;
   // Per-step scratch, kept to avoid reallocating every step.
   std::vector<TipRef> refs_;
+  std::vector<uint32_t> firstOutcome_;  // per plant, + the total
   std::vector<Outcome> outcomes_;
-  std::vector<Tip> nextTips_;
 };
 
 }  // namespace tendril::climb
