@@ -4,6 +4,7 @@
 #include "tendril/core/parallel.h"
 #include "tendril/io/atomic_file.h"
 #include "tendril/io/export_model.h"
+#include "tendril/io/gltf_writer.h"
 #include "tendril/mesh/leaf_mesh.h"
 #include "tendril/wind/motion.h"
 
@@ -127,8 +128,6 @@ std::vector<int32_t> nearestNodes(const plant::PlantModel& plant, const std::vec
   }, 1024);
   return out;
 }
-
-std::vector<double> toDoubles(const Vec4& v) { return {v.x(), v.y(), v.z(), v.w()}; }
 
 }  // namespace
 
@@ -339,36 +338,7 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
   if (!animation.channels.empty()) gltf.animations.push_back(std::move(animation));
 
   // Materials, samplers, textures and images as the static writer makes them.
-  for (const ExportMaterial& m : model.materials) {
-    tinygltf::Material g;
-    g.name = m.name;
-    g.pbrMetallicRoughness.baseColorFactor = toDoubles(m.baseColor);
-    g.pbrMetallicRoughness.metallicFactor = m.metallic;
-    g.pbrMetallicRoughness.roughnessFactor = m.roughness;
-    g.pbrMetallicRoughness.baseColorTexture.index = m.texture;
-    if (m.alphaMask) {
-      g.alphaMode = "MASK";
-      g.alphaCutoff = 0.5;
-    }
-    g.doubleSided = m.doubleSided;
-    gltf.materials.push_back(std::move(g));
-  }
-  int samplerOf[2] = {-1, -1};
-  for (const ExportTexture& t : model.textures) {
-    int& s = samplerOf[t.repeat ? 1 : 0];
-    if (s < 0) {
-      tinygltf::Sampler sampler;
-      sampler.magFilter = TINYGLTF_TEXTURE_FILTER_LINEAR;
-      sampler.minFilter = TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_LINEAR;
-      sampler.wrapS = sampler.wrapT = t.repeat ? TINYGLTF_TEXTURE_WRAP_REPEAT : TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE;
-      gltf.samplers.push_back(sampler);
-      s = int(gltf.samplers.size() - 1);
-    }
-    tinygltf::Texture texture;
-    texture.sampler = s;
-    texture.source = t.image;
-    gltf.textures.push_back(texture);
-  }
+  appendMaterialsAndTextures(model, gltf);
   for (const ExportImage& img : model.images) {
     tinygltf::Image image;
     image.name = std::filesystem::path(img.spec).filename().string();

@@ -164,31 +164,7 @@ std::vector<double> toDoubles(const Vec4& v) { return {v.x(), v.y(), v.z(), v.w(
 
 }  // namespace
 
-void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
-  tinygltf::Model gltf;
-  gltf.asset.version = "2.0";
-  gltf.asset.generator = "Tendril " TENDRIL_VERSION;
-  GlbBuilder builder(gltf);
-  std::vector<CopyJob> jobs;
-
-  tinygltf::Scene scene;
-  scene.name = "Tendril";  // also keeps an empty scene an object rather than null
-  for (const ExportObject& object : model.objects) {
-    tinygltf::Node node;
-    node.name = object.name;
-    if (!object.parts.empty()) {
-      tinygltf::Mesh mesh;
-      mesh.name = object.name;
-      for (const ExportPart& part : object.parts) mesh.primitives.push_back(addPart(part, builder, gltf, jobs));
-      gltf.meshes.push_back(std::move(mesh));
-      node.mesh = static_cast<int>(gltf.meshes.size() - 1);
-    }
-    gltf.nodes.push_back(std::move(node));
-    scene.nodes.push_back(static_cast<int>(gltf.nodes.size() - 1));
-  }
-  gltf.scenes.push_back(std::move(scene));
-  gltf.defaultScene = 0;
-
+void appendMaterialsAndTextures(const ExportModel& model, tinygltf::Model& gltf) {
   for (const ExportMaterial& m : model.materials) {
     tinygltf::Material g;
     g.name = m.name;
@@ -222,6 +198,34 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
     texture.source = t.image;
     gltf.textures.push_back(texture);
   }
+}
+
+void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
+  tinygltf::Model gltf;
+  gltf.asset.version = "2.0";
+  gltf.asset.generator = "Tendril " TENDRIL_VERSION;
+  GlbBuilder builder(gltf);
+  std::vector<CopyJob> jobs;
+
+  tinygltf::Scene scene;
+  scene.name = "Tendril";  // also keeps an empty scene an object rather than null
+  for (const ExportObject& object : model.objects) {
+    tinygltf::Node node;
+    node.name = object.name;
+    if (!object.parts.empty()) {
+      tinygltf::Mesh mesh;
+      mesh.name = object.name;
+      for (const ExportPart& part : object.parts) mesh.primitives.push_back(addPart(part, builder, gltf, jobs));
+      gltf.meshes.push_back(std::move(mesh));
+      node.mesh = static_cast<int>(gltf.meshes.size() - 1);
+    }
+    gltf.nodes.push_back(std::move(node));
+    scene.nodes.push_back(static_cast<int>(gltf.nodes.size() - 1));
+  }
+  gltf.scenes.push_back(std::move(scene));
+  gltf.defaultScene = 0;
+
+  appendMaterialsAndTextures(model, gltf);
   for (const ExportImage& img : model.images) {
     tinygltf::Image image;
     image.name = std::filesystem::path(img.spec).filename().string();

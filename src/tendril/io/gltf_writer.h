@@ -17,7 +17,15 @@
 
 #include <filesystem>
 
+namespace tinygltf {
+class Model;
+}
+
 namespace tendril::io {
+
+// Appends the model's materials, samplers (one per wrap mode in use) and textures to a glTF
+// being built; images (texture sources) are left to the caller, which owns the binary buffer.
+void appendMaterialsAndTextures(const ExportModel& model, tinygltf::Model& gltf);
 
 void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options = {});
 void writeGlb(const ExportModel& model, const std::filesystem::path& path);
