@@ -198,9 +198,12 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   posed.name = rest_.name;
   posed.species = rest_.species;
   posed.bark = rest_.bark;
+  // Primitive meshes ride on their nodes unchanged: copy them once, not every frame.
+  if (posed.meshes.size() != rest_.meshes.size() || posed.primitives.size() != rest_.primitives.size()) {
+    posed.meshes = rest_.meshes;
+    posed.primitives = rest_.primitives;
+  }
   posed.leafShapes = rest_.leafShapes;
-  posed.meshes = rest_.meshes;
-  posed.primitives = rest_.primitives;
   posed.position.resize(n);
   posed.orientation.resize(n);
   posed.length = rest_.length;

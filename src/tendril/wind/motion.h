@@ -50,7 +50,9 @@ class WindMotion {
   WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& species, MotionSettings settings = {});
 
   // Advances one frame to time t (s) with frame length dt and writes the posed plant (the rest
-  // plant with swayed nodes and moved leaves; detached leaves left out).
+  // plant with swayed nodes and moved leaves; detached leaves left out). Pass the same `posed`
+  // frame after frame: its primitive meshes are copied from the rest plant only when it has a
+  // different number of them.
   void step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed);
 
   // The sway angle of every node in the last step (rad) and its world axis.
