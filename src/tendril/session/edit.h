@@ -1,0 +1,208 @@
+// Interactive edits of a Session as plain values (seed 000 §5: seeding, branch seeding,
+// cutting, dragging, painting attractors, moving obstacles and lights while plants grow), an
+// Editor that applies them with undo/redo, and the picking helpers a viewport needs.
+//
+// Every edit is also a JSON object {"edit": "<kind>", ...} (docs/edit-scripts.md), so that a
+// list of them replays an interactive session from the CLI (`tendril edit`) and in tests.
+//
+// Undo is exact: before an edit the Editor saves the whole Session state (Session::saveState)
+// and undo restores those bytes, so the plants and the environment hash as before.
+#pragma once
+
+#include "tendril/core/json_reader.h"
+#include "tendril/core/math.h"
+#include "tendril/env/environment.h"
+
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace tendril::session {
+
+class Session;
+
+inline constexpr uint32_t kNoParticle = std::numeric_limits<uint32_t>::max();
+
+// --- the edits ---
+
+// A new plant of any model standing at a surface point, growing along the surface normal.
+struct SeedPlant {
+  std::string model = "particles";  // a name in models::modelTypes()
+  // climb, particles: species preset name or .json path; lsystem: grammar name or .ls path;
+  // graph: graph .json path. Empty = the model's default (climb, particles). Relative paths
+  // are resolved against the scene's directory.
+  std::string species;
+  std::string name;                 // empty = "plant<N>"
+  Vec3 position = Vec3::Zero();     // seed point (m)
+  Vec3 normal = Vec3::UnitY();      // initial growth direction (the surface normal)
+  uint64_t seed = 1;
+};
+
+// A new lateral apex on a grown branch particle of a particle plant (§5.1); it grows with the
+// following steps.
+struct SeedBranch {
+  uint32_t plant = 0;
+  uint32_t particle = 0;         // particle id (NodePick::particle)
+  Vec3 direction = Vec3::UnitY();
+};
+
+// Cuts a plant at one of its segments: the segment and everything beyond it go. Particle
+// plants: the piece falls and disappears (ParticleWorld::cut). Climbing plants: the subtree
+// is removed at once (its tips die with it). Other models cannot be cut (Error).
+struct Cut {
+  uint32_t plant = 0;
+  uint32_t node = 0;  // node index in the plant's snapshot (NodePick::node)
+};
+
+// A drag gesture on a particle plant through a soft constraint (§5.1): begin, any number of
+// moves (and steps), end. The whole gesture is one undo entry. Connections strained past the
+// species' threshold break in the world's own step.
+struct DragBegin {
+  uint32_t plant = 0;
+  uint32_t particle = 0;
+  Vec3 target = Vec3::Zero();
+  float strength = 0.5f;  // 0–1
+};
+struct DragMove {
+  Vec3 target = Vec3::Zero();
+};
+struct DragEnd {};
+
+// Paints an attractor (or repulsor) stroke on surfaces. A new attracting stroke within its
+// radius of a full-grown branch particle of a particle plant seeds a branch there, toward the
+// stroke (§5.1).
+struct PaintStroke {
+  env::Stroke stroke;
+};
+
+// Moves/rotates an obstacle (by index in the environment) while plants grow.
+struct MoveObstacle {
+  uint32_t obstacle = 0;
+  RigidTransform worldFromLocal;
+};
+
+// Replaces a light (by index): its position (point lights) and direction (directional).
+struct MoveLight {
+  uint32_t light = 0;
+  env::Light value;
+};
+
+// Wind emitters (env::WindSettings::emitters; in sph mode they also feed the simulated air).
+struct AddEmitter {
+  env::WindEmitter emitter;
+};
+struct EditEmitter {
+  uint32_t index = 0;
+  env::WindEmitter emitter;
+};
+struct RemoveEmitter {
+  uint32_t index = 0;
+};
+
+// Live species parameters of a particle plant: a JSON object of species keys (as in a species
+// file, docs/particles.md), applied on top of the plant's current species.
+struct SetSpecies {
+  uint32_t plant = 0;
+  Json keys = Json::object();
+};
+
+// Advances the simulation (not an undo entry of its own).
+struct Step {
+  uint32_t count = 1;
+};
+
+// Undo / redo as edits, so that scripts and the session journal replay them too.
+struct Undo {};
+struct Redo {};
+
+using Edit = std::variant<SeedPlant, SeedBranch, Cut, DragBegin, DragMove, DragEnd, PaintStroke, MoveObstacle,
+                          MoveLight, AddEmitter, EditEmitter, RemoveEmitter, SetSpecies, Step, Undo, Redo>;
+
+// The edit's JSON "edit" name, e.g. "seed_plant".
+const char* editName(const Edit& edit);
+// {"edit": "<name>", ...fields}.
+Json editToJson(const Edit& edit);
+// Reads an edit from an object whose "edit" key names its kind; strict (unknown keys are
+// errors naming source and pointer). Does not call o.finish() for keys it does not know
+// about beyond the edit's own: the caller may read more keys (e.g. "at_step") first.
+Edit readEdit(JsonObject& o);
+
+// An edit at a step count (edit scripts, the session journal).
+struct TimedEdit {
+  uint32_t atStep = 0;
+  Edit edit;
+};
+
+// --- the editor ---
+
+class Editor {
+ public:
+  static constexpr size_t kDefaultHistoryBytes = size_t(256) << 20;
+
+  // `historyBytes` caps the memory of undo and redo snapshots; the oldest are dropped.
+  explicit Editor(Session& session, size_t historyBytes = kDefaultHistoryBytes);
+  ~Editor();
+  Editor(const Editor&) = delete;
+  Editor& operator=(const Editor&) = delete;
+
+  Session& session() { return session_; }
+  const Session& session() const { return session_; }
+
+  // Applies an edit. Throws Error for an edit that does not fit the session (no such plant,
+  // particle, obstacle...), leaving the session as it was. Undo/Redo with nothing to undo or
+  // redo are Errors too.
+  void apply(const Edit& edit);
+  // Steps the session (same as apply(Step{count})).
+  void step(uint32_t count = 1);
+
+  bool canUndo() const;
+  bool canRedo() const;
+  void undo();  // throws Error when there is nothing to undo
+  void redo();  // throws Error when there is nothing to redo
+  size_t undoDepth() const;
+  size_t redoDepth() const;
+  size_t historyBytes() const;  // memory held by snapshots
+
+  bool dragging() const { return dragging_; }
+
+  // Every applied edit, with the step count it was applied at, in order (steps are merged
+  // into one entry per run of steps). Replaying it on the same starting session gives the
+  // same state (runEditScript).
+  const std::vector<TimedEdit>& journal() const { return journal_; }
+  void setJournal(std::vector<TimedEdit> journal) { journal_ = std::move(journal); }
+
+ private:
+  struct Snapshot;
+  void applyEdit(const Edit& edit);
+  void record(const Edit& edit);
+  void trim();
+
+  Session& session_;
+  size_t historyBytesCap_;
+  std::vector<Snapshot> undo_, redo_;
+  std::vector<TimedEdit> journal_;
+  bool dragging_ = false;
+};
+
+// --- picking ---
+
+struct NodePick {
+  uint32_t plant = 0;
+  uint32_t node = 0;                 // node index in the plant's snapshot
+  uint32_t particle = kNoParticle;   // particle id, for particle plants
+  Vec3 point = Vec3::Zero();         // closest point on the segment's axis to the ray
+  float t = 0.0f;                    // distance along the ray (m)
+};
+
+// The plant segment nearest the ray origin among those the ray passes within
+// max(segment radius, tolerance) of. `dir` need not be unit length.
+std::optional<NodePick> pickNode(const Session& session, const Vec3& origin, const Vec3& dir,
+                                 float tolerance = 0.01f, float maxDistance = 1e4f);
+// The first obstacle surface the ray hits (for seeding and painting).
+std::optional<env::RayHit> pickSurface(const Session& session, const Vec3& origin, const Vec3& dir,
+                                       float maxDistance = 1e4f);
+
+}  // namespace tendril::session
