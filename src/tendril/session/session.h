@@ -8,9 +8,15 @@
 #include "tendril/scene/scene.h"
 #include "tendril/wind/sph.h"
 
+#include <filesystem>
 #include <functional>
 #include <memory>
+#include <span>
 #include <vector>
+
+namespace tendril::particles {
+class ParticleWorld;
+}
 
 namespace tendril::session {
 
@@ -19,6 +25,11 @@ class Session {
   // Builds the environment and seeds every plant. Throws Error for seeds inside obstacles and
   // other bad plant settings, naming the scene file and the plant's JSON pointer.
   explicit Session(scene::Scene scene);
+  // The same, keeping the scene's JSON document so that a session file can rebuild the
+  // environment (session_file.h). `baseDir` resolves the scene's relative paths.
+  Session(scene::Scene scene, Json sceneDocument, std::filesystem::path baseDir);
+  // Reads a scene file and opens it (keeps the document, as above).
+  static std::unique_ptr<Session> open(const std::filesystem::path& scenePath);
   ~Session();
   Session(const Session&) = delete;
   Session& operator=(const Session&) = delete;
@@ -41,13 +52,67 @@ class Session {
   std::vector<wind::GrowthFlowSpecies> growthFlow() const;
   size_t segmentCount() const;
 
+  // --- plants at run time ---
+  // Adds a plant now (any model). `description` is the plant as a scene-file plant object;
+  // plants added without one cannot be written to a session file. Throws Error for a seed
+  // inside an obstacle and other bad settings. Returns the plant's index.
+  uint32_t addPlant(scene::PlantSpec spec, Json description = {});
+  // Adds a plant from a scene-file plant object (docs/scene-format.md); errors name `source`
+  // and the object's keys.
+  uint32_t addPlant(const Json& plant, const std::string& source);
+  size_t plantCount() const { return plants_.size(); }
+  const scene::PlantSpec& plantSpec(size_t plant) const { return specs_.at(plant).spec; }
+  // The plant's scene-file object (null for plants added from code).
+  const Json& plantDescription(size_t plant) const { return specs_.at(plant).description; }
+  // Replaces a plant's settings live from a new scene-file plant object of the same model
+  // (e.g. changed species keys). Throws Error when the model cannot change them live.
+  void setPlantDescription(size_t plant, const Json& description, const std::string& source);
+  // The plant's own system and its index there.
+  models::PlantSystem& system(size_t plant) { return *systems_[plants_.at(plant).system]; }
+  const models::PlantSystem& system(size_t plant) const { return *systems_[plants_.at(plant).system]; }
+  size_t indexInSystem(size_t plant) const { return plants_.at(plant).index; }
+  // The particle world of the particle plants (null when the session has none).
+  particles::ParticleWorld* particleWorld();
+  const particles::ParticleWorld* particleWorld() const;
+  // The simulated air (wind mode sph), or null.
+  wind::SphAir* air() { return air_.get(); }
+  const wind::SphAir* air() const { return air_.get(); }
+
+  // The scene document and directory (null/empty when built from a Scene alone).
+  const Json& sceneDocument() const { return sceneDocument_; }
+  const std::filesystem::path& baseDir() const { return baseDir_; }
+
+  // --- state ---
+  // Everything that decides future steps: the environment's editable state (obstacle
+  // transforms, lights, strokes, wind), every plant (its description and its system's state),
+  // the simulated air and the step count. loadState restores it exactly: stepping on gives
+  // bit-identical results to never having saved. Throws Error(source, "byte N", ...) for
+  // damaged or mismatched input, leaving the session unchanged.
+  std::vector<uint8_t> saveState() const;
+  void loadState(std::span<const uint8_t> bytes, const std::string& source = "session state");
+  // Hash of every plant snapshot and the environment's editable state (undo checks, tests).
+  uint64_t stateHash() const;
+  // Commits environment edits (obstacle moves, strokes) and refreshes what depends on them.
+  void environmentChanged();
+
  private:
   struct PlantRef {
     size_t system;  // index into systems_
     size_t index;   // plant index within that system
   };
 
+  struct SpecEntry {
+    scene::PlantSpec spec;
+    Json description;
+    std::string text;  // description.dump(), compared on loadState
+  };
+  size_t systemFor(const std::string& model);
+  void rebuildSystems(size_t plantCount);
+
   scene::Scene scene_;
+  Json sceneDocument_;
+  std::filesystem::path baseDir_;
+  std::vector<SpecEntry> specs_;  // per plant; plants are only ever appended
   std::unique_ptr<env::Environment> env_;
   std::vector<std::unique_ptr<models::PlantSystem>> systems_;  // one per model in use
   std::vector<std::string> systemModels_;
