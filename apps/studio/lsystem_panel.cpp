@@ -1,0 +1,74 @@
+#include "lsystem_panel.h"
+
+#include "tendril/core/error.h"
+#include "tendril/core/timer.h"
+
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+namespace tendril::studio {
+
+namespace {
+// A preview derivation stops growing past this many modules so typing stays responsive.
+constexpr size_t kPreviewModuleLimit = 200000;
+}  // namespace
+
+void LSystemPanel::open(uint32_t plant, const std::shared_ptr<const lsystem::Grammar>& grammar,
+                        std::optional<int> derivationLength, const Vec3& position) {
+  open_ = true;
+  plant_ = plant;
+  source_ = grammar->source;
+  text_ = lsystem::grammarSourceText(grammar->source).value_or(std::string());
+  derivationLength_ = derivationLength;
+  steps_ = derivationLength.value_or(grammar->derivationLength);
+  position_ = position;
+  rebuild();
+}
+
+void LSystemPanel::rebuild() {
+  error_.clear();
+  diagnostic_.clear();
+  preview_.reset();
+  modules_ = 0;
+  try {
+    lsystem::CompileOptions options;
+    options.dir = std::filesystem::path(source_).parent_path();
+    auto grammar = lsystem::compileGrammar(text_, "editor", options);
+    lsystem::RunOptions run;
+    run.derivationLength = steps_;
+    // Beside the plant, so the preview and the growing plant can be compared.
+    run.start.position = position_ + Vec3(0.6f, 0.0f, 0.0f);
+    Timer timer;
+    lsystem::LSystem ls(grammar, run);
+    while (!ls.finished() && ls.string().size() < kPreviewModuleLimit) ls.step();
+    preview_ = ls.interpret();
+    preview_->name = "preview";
+    modules_ = ls.string().size();
+    deriveMs_ = timer.milliseconds();
+  } catch (const Error& e) {
+    error_ = e.what();
+    diagnostic_ = lsystem::renderDiagnostic(text_, e);
+  }
+}
+
+void LSystemPanel::draw() {
+  if (!open_) return;
+  ImGui::TextDisabled("%s", source_.c_str());
+  bool changed = ImGui::InputTextMultiline("##grammar", &text_, ImVec2(-1, ImGui::GetTextLineHeight() * 16),
+                                           ImGuiInputTextFlags_AllowTabInput);
+  ImGui::SetNextItemWidth(120);
+  changed |= ImGui::SliderInt("derivation steps", &steps_, 0, 20);
+  if (changed) rebuild();
+  if (!error_.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.45f, 0.4f, 1.0f));
+    ImGui::TextWrapped("%s", error_.c_str());
+    if (!diagnostic_.empty()) ImGui::TextUnformatted(diagnostic_.c_str());
+    ImGui::PopStyleColor();
+  } else if (preview_) {
+    ImGui::Text("preview: %zu modules, %zu segments, %zu leaves (%.1f ms)", modules_, preview_->nodeCount(),
+                preview_->leafCount(), deriveMs_);
+    if (modules_ >= kPreviewModuleLimit) ImGui::TextDisabled("stopped at %zu modules", kPreviewModuleLimit);
+  }
+}
+
+}  // namespace tendril::studio

@@ -1,0 +1,36 @@
+// tendril-studio's command line: an optional scene or session file, and the headless mode
+// (`--script EDITS.json --frames N --screenshot OUT.png`) that replays edits, renders the full
+// window and exits.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tendril::studio {
+
+struct StudioOptions {
+  std::string input;       // scene (.json) or session file; empty = the default scene
+  std::string script;      // edit script replayed on the timeline; empty = none
+  int64_t frames = -1;     // headless: frames to run before the screenshot (-1 = interactive)
+  std::string screenshot;  // headless: PNG written after the last frame
+  std::string saveSession; // headless: session file written after the last frame
+  int width = 1600;        // window size (pixels)
+  int height = 900;
+  int speed = 1;           // growth steps per frame while playing
+  bool stats = false;      // per-frame timing on stdout
+  bool paused = false;     // start paused (interactive mode)
+  bool help = false;
+
+  bool headless() const { return frames >= 0; }
+};
+
+// Throws Error("command line", "<argument>", what was expected) for an unknown option, a
+// missing or malformed value, or a headless run without both --frames and --screenshot.
+StudioOptions parseOptions(const std::vector<std::string>& args);
+
+// The usage text printed by --help.
+std::string usage();
+
+}  // namespace tendril::studio

@@ -1,0 +1,491 @@
+// The studio's ImGui panels: menu, tools, scene tree, inspector (plant species, L-system
+// editor, obstacle, light, emitter, stroke, wind), timeline and status bar. Every change to
+// the session goes through Studio::Impl::apply (the library's Editor), so it can be undone.
+#include "studio_impl.h"
+
+#include "tendril/core/error.h"
+#include "tendril/lsystem/lsystem_model.h"
+#include "tendril/particles/world.h"
+
+#include <fmt/format.h>
+#include <imgui.h>
+#include <imgui_stdlib.h>
+
+#include <algorithm>
+
+namespace tendril::studio {
+namespace {
+
+constexpr float kLeftWidth = 290.0f;
+constexpr float kRightWidth = 380.0f;
+constexpr float kTimelineHeight = 40.0f;
+constexpr float kStatusHeight = 26.0f;
+constexpr ImGuiWindowFlags kFixed = ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize |
+                                    ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings;
+
+Vec3 degreesFromQuat(const Quat& q) {
+  // X, then Y, then Z (as quatFromEulerDegrees): q = Rz · Ry · Rx.
+  Mat3 r = q.toRotationMatrix();
+  float y = std::asin(std::clamp(-r(2, 0), -1.0f, 1.0f));
+  float x = std::atan2(r(2, 1), r(2, 2));
+  float z = std::atan2(r(1, 0), r(0, 0));
+  return Vec3(x, y, z) * (180.0f / kPi);
+}
+
+bool editVec3(const char* label, Vec3& v, float speed, const char* format = "%.3f") {
+  float values[3] = {v.x(), v.y(), v.z()};
+  ImGui::DragFloat3(label, values, speed, 0.0f, 0.0f, format);
+  v = Vec3(values[0], values[1], values[2]);
+  return ImGui::IsItemDeactivatedAfterEdit();
+}
+
+}  // namespace
+
+void Studio::Impl::layout() {
+  ImGuiIO& io = ImGui::GetIO();
+  const float menu = ImGui::GetFrameHeight();
+  viewport = {kLeftWidth, menu, std::max(16.0f, io.DisplaySize.x - kLeftWidth - kRightWidth),
+              std::max(16.0f, io.DisplaySize.y - menu - kTimelineHeight - kStatusHeight)};
+}
+
+void Studio::Impl::drawUi() {
+  drawMenu();
+  ImGuiIO& io = ImGui::GetIO();
+  const float menu = ImGui::GetFrameHeight();
+  const float bottom = io.DisplaySize.y - kTimelineHeight - kStatusHeight;
+
+  ImGui::SetNextWindowPos(ImVec2(0, menu));
+  ImGui::SetNextWindowSize(ImVec2(kLeftWidth, bottom - menu));
+  if (ImGui::Begin("Scene", nullptr, kFixed)) {
+    drawTools();
+    drawToolOptions();
+    ImGui::Separator();
+    drawSceneTree();
+  }
+  ImGui::End();
+
+  ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x - kRightWidth, menu));
+  ImGui::SetNextWindowSize(ImVec2(kRightWidth, bottom - menu));
+  if (ImGui::Begin("Inspector", nullptr, kFixed)) {
+    drawInspector();
+    ImGui::Spacing();
+    drawWindPanel();
+  }
+  ImGui::End();
+
+  ImGui::SetNextWindowPos(ImVec2(0, bottom));
+  ImGui::SetNextWindowSize(ImVec2(io.DisplaySize.x, kTimelineHeight));
+  if (ImGui::Begin("Timeline", nullptr, kFixed | ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoScrollbar))
+    drawTimeline();
+  ImGui::End();
+
+  ImGui::SetNextWindowPos(ImVec2(0, io.DisplaySize.y - kStatusHeight));
+  ImGui::SetNextWindowSize(ImVec2(io.DisplaySize.x, kStatusHeight));
+  ImGui::PushStyleVar(ImGuiStyleVar_WindowPadding, ImVec2(8, 4));
+  if (ImGui::Begin("Status", nullptr, kFixed | ImGuiWindowFlags_NoTitleBar | ImGuiWindowFlags_NoScrollbar))
+    drawStatus();
+  ImGui::End();
+  ImGui::PopStyleVar();
+  drawFileDialog();
+}
+
+void Studio::Impl::drawMenu() {
+  if (!ImGui::BeginMainMenuBar()) return;
+  if (ImGui::BeginMenu("File")) {
+    if (ImGui::MenuItem("Open scene or session...", "Ctrl+O")) {
+      fileAction = FileAction::Open;
+      filePath = currentPath.string();
+    }
+    if (ImGui::MenuItem("Save session...", "Ctrl+S")) {
+      fileAction = FileAction::Save;
+      filePath = currentPath.extension() == ".tses" ? currentPath.string() : "session.tses";
+    }
+    if (ImGui::MenuItem("Export plants (.glb / .obj)...")) {
+      fileAction = FileAction::Export;
+      filePath = "plants.glb";
+    }
+    ImGui::Separator();
+    if (ImGui::MenuItem("Quit", "Ctrl+Q")) window.requestClose();
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("Edit")) {
+    if (ImGui::MenuItem("Undo", "Ctrl+Z", false, editor->canUndo() && !editor->dragging())) undo();
+    if (ImGui::MenuItem("Redo", "Ctrl+Y", false, editor->canRedo() && !editor->dragging())) redo();
+    ImGui::EndMenu();
+  }
+  if (ImGui::BeginMenu("View")) {
+    if (ImGui::MenuItem("Frame scene", "F")) cameraFramed = false;
+    ImGui::MenuItem("Shadows", nullptr, &renderSettings.shadows);
+    ImGui::EndMenu();
+  }
+  ImGui::EndMainMenuBar();
+}
+
+void Studio::Impl::drawFileDialog() {
+  static const char* titles[] = {"", "Open", "Save session", "Export plants"};
+  if (fileAction == FileAction::None) return;
+  const char* title = titles[int(fileAction)];
+  if (!ImGui::IsPopupOpen(title)) ImGui::OpenPopup(title);
+  ImGui::SetNextWindowSize(ImVec2(520, 0));
+  if (ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_NoSavedSettings)) {
+    ImGui::TextUnformatted(fileAction == FileAction::Open     ? "Scene (.json) or session (.tses) file:"
+                           : fileAction == FileAction::Save   ? "Session file (.tses):"
+                                                              : "Plants file (.glb or .obj):");
+    ImGui::SetNextItemWidth(-1);
+    if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
+    bool go = ImGui::InputText("##path", &filePath, ImGuiInputTextFlags_EnterReturnsTrue);
+    go |= ImGui::Button("OK", ImVec2(100, 0));
+    ImGui::SameLine();
+    bool cancel = ImGui::Button("Cancel", ImVec2(100, 0));
+    if (go) {
+      try {
+        if (fileAction == FileAction::Open) openFile(filePath);
+        else if (fileAction == FileAction::Save) saveFile(filePath);
+        else exportFile(filePath);
+        cancel = true;
+      } catch (const Error& e) {
+        status = e.what();
+        statusIsError = true;
+      }
+    }
+    if (statusIsError) ImGui::TextColored(ImVec4(1, 0.45f, 0.4f, 1), "%s", status.c_str());
+    if (cancel) {
+      fileAction = FileAction::None;
+      ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+  }
+}
+
+void Studio::Impl::drawTools() {
+  ImGui::TextDisabled("Tools (keys 1-9, 0)");
+  const Tool tools[] = {Tool::View, Tool::Seed, Tool::BranchSeed, Tool::Cut, Tool::Drag,
+                        Tool::PaintAttract, Tool::PaintRepel, Tool::MoveObstacle, Tool::Light, Tool::WindEmitter};
+  const float half = (ImGui::GetContentRegionAvail().x - ImGui::GetStyle().ItemSpacing.x) * 0.5f;
+  for (int i = 0; i < 10; ++i) {
+    if (i % 2) ImGui::SameLine();
+    std::string label = fmt::format("{} {}", (i + 1) % 10, toolName(tools[i]));
+    if (ImGui::Selectable(label.c_str(), tool == tools[i], 0, ImVec2(half, 0))) tool = tools[i];
+  }
+}
+
+void Studio::Impl::drawToolOptions() {
+  ImGui::PushItemWidth(150);
+  switch (tool) {
+    case Tool::View:
+      ImGui::TextWrapped("Left or right drag: orbit. Shift+drag or middle drag: pan. Wheel: zoom. "
+                         "Double click: select.");
+      break;
+    case Tool::Seed:
+      ImGui::Combo("model", &seedModel, kSeedModels, IM_ARRAYSIZE(kSeedModels));
+      ImGui::InputTextWithHint("species", "model default", &seedSpecies);
+      ImGui::TextWrapped("Click a surface to seed a plant there.");
+      break;
+    case Tool::BranchSeed: ImGui::TextWrapped("Click a grown branch of a particle plant to seed a branch."); break;
+    case Tool::Cut: ImGui::TextWrapped("Click a branch to cut it; the piece beyond falls."); break;
+    case Tool::Drag:
+      ImGui::SliderFloat("strength", &dragStrength, 0.05f, 1.0f);
+      ImGui::TextWrapped("Drag a particle plant's branch; colours show the strain.");
+      break;
+    case Tool::PaintAttract:
+    case Tool::PaintRepel:
+      ImGui::SliderFloat("radius (m)", &paintRadius, 0.02f, 1.0f);
+      ImGui::SliderFloat("strength", &paintStrength, 0.0f, 5.0f);
+      ImGui::TextWrapped("Drag over surfaces to paint.");
+      break;
+    case Tool::MoveObstacle:
+      ImGui::TextWrapped("Drag an obstacle to move it across the view; Shift+drag turns it about the vertical.");
+      break;
+    case Tool::Light:
+      ImGui::TextWrapped("Drag to turn the selected (or first) light; point lights move across the view.");
+      break;
+    case Tool::WindEmitter:
+      ImGui::SliderFloat("speed (m/s)", &emitterSpeed, 0.5f, 20.0f);
+      ImGui::SliderFloat("radius (m)", &emitterRadius, 0.05f, 2.0f);
+      ImGui::TextWrapped("Click a surface: an emitter 1 m in front of it blows at it.");
+      break;
+  }
+  ImGui::PopItemWidth();
+}
+
+void Studio::Impl::drawSceneTree() {
+  const env::Environment& env = session->environment();
+  ImGui::TextDisabled("Scene");
+  auto item = [&](Selection::Kind kind, uint32_t index, const std::string& label) {
+    if (ImGui::Selectable(label.c_str(), selection.is(kind, index))) selection = {kind, index, std::nullopt};
+  };
+  ImGui::SetNextItemOpen(true, ImGuiCond_Once);
+  if (ImGui::TreeNode("Obstacles")) {
+    for (uint32_t id = 0; id < env.obstacleCount(); ++id) {
+      const env::ObstacleInfo& info = env.obstacle(id);
+      item(Selection::Kind::Obstacle, id,
+           fmt::format("{} ({})##o{}", info.name.empty() ? "obstacle" : info.name, env::obstacleKindName(info.kind), id));
+    }
+    ImGui::TreePop();
+  }
+  ImGui::SetNextItemOpen(true, ImGuiCond_Once);
+  if (ImGui::TreeNode("Plants")) {
+    const auto& plants = view.plants();
+    for (uint32_t p = 0; p < plants.size(); ++p)
+      item(Selection::Kind::Plant, p,
+           fmt::format("{} [{}] {} seg##p{}", plants[p].name, session->plantSpec(p).model, plants[p].nodeCount(), p));
+    ImGui::TreePop();
+  }
+  ImGui::SetNextItemOpen(true, ImGuiCond_Once);
+  if (ImGui::TreeNode("Lights")) {
+    for (uint32_t i = 0; i < env.lights().size(); ++i)
+      item(Selection::Kind::Light, i,
+           fmt::format("{} light {}##l{}", env.lights()[i].type == env::Light::Type::Directional ? "directional" : "point",
+                       i, i));
+    ImGui::TreePop();
+  }
+  ImGui::SetNextItemOpen(true, ImGuiCond_Once);
+  if (ImGui::TreeNode("Wind emitters")) {
+    const auto& emitters = env.windField().settings().emitters;
+    for (uint32_t i = 0; i < emitters.size(); ++i)
+      item(Selection::Kind::Emitter, i, fmt::format("emitter {} ({:.1f} m/s)##e{}", i, emitters[i].speed, i));
+    ImGui::TreePop();
+  }
+  ImGui::SetNextItemOpen(true, ImGuiCond_Once);
+  if (ImGui::TreeNode("Strokes")) {
+    for (uint32_t i = 0; i < env.strokes().size(); ++i) {
+      const env::Stroke& s = env.strokes()[i];
+      item(Selection::Kind::Stroke, i, fmt::format("{} ({} points)##s{}", s.attract ? "attract" : "repel",
+                                                   s.points.size(), i));
+    }
+    ImGui::TreePop();
+  }
+}
+
+void Studio::Impl::drawInspector() {
+  switch (selection.kind) {
+    case Selection::Kind::None:
+      ImGui::TextWrapped("Select a plant, obstacle, light, emitter or stroke in the scene tree, or double click "
+                         "in the viewport.");
+      break;
+    case Selection::Kind::Plant: drawPlantPanel(selection.index); break;
+    case Selection::Kind::Obstacle: drawObstaclePanel(selection.index); break;
+    case Selection::Kind::Light: drawLightPanel(selection.index); break;
+    case Selection::Kind::Emitter: drawEmitterPanel(selection.index); break;
+    case Selection::Kind::Stroke: drawStrokePanel(selection.index); break;
+  }
+}
+
+void Studio::Impl::drawPlantPanel(uint32_t p) {
+  const auto& plants = view.plants();
+  if (p >= plants.size() || p >= session->plantCount()) {
+    selection = {};
+    return;
+  }
+  const plant::PlantModel& m = plants[p];
+  const scene::PlantSpec& spec = session->plantSpec(p);
+  ImGui::Text("%s  (model %s)", m.name.c_str(), spec.model.c_str());
+  ImGui::Text("%zu segments, %zu leaves", m.nodeCount(), m.leafCount());
+  if (selection.node && *selection.node < m.nodeCount()) {
+    uint32_t n = *selection.node;
+    ImGui::Text("segment %u: length %.3f m, radius %.4f m, age %.1f s", n, m.length[n], m.radius[n], m.age[n]);
+  }
+  ImGui::Separator();
+  if (spec.model == "particles") {
+    drawParticleSpecies(p);
+    return;
+  }
+  if (spec.model == "lsystem") {
+    if (const auto* params = spec.paramsAs<lsystem::LSystemParams>()) {
+      if (!lsystemPanel.isOpenFor(p)) lsystemPanel.open(p, params->grammar, params->derivationLength, spec.position);
+      if (ImGui::CollapsingHeader("L-system editor", ImGuiTreeNodeFlags_DefaultOpen)) lsystemPanel.draw();
+    }
+  }
+  // Other models' settings cannot be changed live through the editor yet: shown as they are.
+  if (ImGui::CollapsingHeader("Plant settings (read-only)")) {
+    const Json& description = session->plantDescription(p);
+    std::string text = description.is_null() ? std::string("(added from code)") : description.dump(2);
+    ImGui::BeginChild("settings", ImVec2(0, 260), true, ImGuiWindowFlags_HorizontalScrollbar);
+    ImGui::TextUnformatted(text.c_str());
+    ImGui::EndChild();
+  }
+}
+
+// Table 2 of seed 000 and the material and growth settings beside it, applied live through
+// SetSpecies edits when a field is released.
+void Studio::Impl::drawParticleSpecies(uint32_t p) {
+  const particles::ParticleWorld* world = session->particleWorld();
+  if (!world) return;
+  const particles::ParticleSpecies& s = world->species(uint32_t(session->indexInSystem(p)));
+  ImGui::Text("Species %s", s.name.c_str());
+  ImGui::TextDisabled("Table 2: N = %zu plant(s) in the scene", session->plantCount());
+  ImGui::PushItemWidth(150);
+  auto floatKey = [&](const char* label, const char* key, float value, float lo, float hi, const char* format = "%.3f") {
+    float v = value;
+    ImGui::SliderFloat(label, &v, lo, hi, format);
+    if (ImGui::IsItemDeactivatedAfterEdit() && v != value) {
+      session::SetSpecies edit;
+      edit.plant = p;
+      edit.keys = Json::object({{key, v}});
+      apply(edit);
+    }
+  };
+  int buds = s.maxLateralBuds;
+  ImGui::SliderInt("B lateral buds", &buds, 0, 8);
+  if (ImGui::IsItemDeactivatedAfterEdit() && buds != s.maxLateralBuds) {
+    session::SetSpecies edit;
+    edit.plant = p;
+    edit.keys = Json::object({{"lateral_buds", buds}});
+    apply(edit);
+  }
+  floatKey("BP branch probability", "branch_probability", s.branchProbability, 0.0f, 1.0f);
+  floatKey("V branch variance", "branch_variance", s.branchVariance, 0.0f, 1.0f);
+  floatKey("Ph phototropism", "phototropism", s.phototropism, 0.0f, 2.0f);
+  ImGui::Separator();
+  floatKey("growth rate (m/s)", "growth_rate", s.growthRate, 0.0f, 0.1f, "%.4f");
+  floatKey("growth speed", "growth_speed", s.growthSpeed, 0.0f, 100.0f, "%.1f");
+  floatKey("particle length (m)", "particle_length", s.particleLength, 0.005f, 0.5f, "%.3f");
+  floatKey("surface adaption", "surface_adaption", s.surfaceAdaption, 0.0f, 1.0f);
+  floatKey("random walk", "random_walk", s.randomWalk, 0.0f, 1.0f);
+  floatKey("attraction", "attraction", s.attraction, 0.0f, 5.0f);
+  floatKey("spreading", "spreading", s.spreading, 0.0f, 5.0f);
+  ImGui::Separator();
+  floatKey("stiffness", "stiffness", s.stiffness, 0.0f, 1.0f);
+  floatKey("break threshold", "break_threshold", s.breakThreshold, 0.0f, 1.0f);
+  floatKey("max strain", "max_strain", s.maxStrain, 0.01f, 2.0f);
+  floatKey("anchor strength", "anchor_strength", s.anchorStrength, 0.0f, 0.99f);
+  floatKey("damping", "damping", s.damping, 0.0f, 1.0f);
+  ImGui::PopItemWidth();
+}
+
+void Studio::Impl::drawObstaclePanel(uint32_t id) {
+  const env::Environment& env = session->environment();
+  if (id >= env.obstacleCount()) {
+    selection = {};
+    return;
+  }
+  const env::ObstacleInfo& info = env.obstacle(id);
+  ImGui::Text("Obstacle %s (%s)", info.name.c_str(), env::obstacleKindName(info.kind));
+  ImGui::Text("%zu triangles%s", info.triangles, info.closed ? ", closed" : "");
+  Vec3 position = info.worldFromLocal.translation;
+  Vec3 rotation = degreesFromQuat(info.worldFromLocal.rotation);
+  ImGui::PushItemWidth(220);
+  bool moved = editVec3("position (m)", position, 0.01f);
+  bool turned = editVec3("rotation (deg)", rotation, 0.5f, "%.1f");
+  ImGui::PopItemWidth();
+  if (moved || turned) {
+    RigidTransform t = info.worldFromLocal;
+    t.translation = position;
+    if (turned) t.rotation = quatFromEulerDegrees(rotation);
+    apply(session::MoveObstacle{id, t});
+  }
+}
+
+void Studio::Impl::drawLightPanel(uint32_t index) {
+  const auto& lights = session->environment().lights();
+  if (index >= lights.size()) {
+    selection = {};
+    return;
+  }
+  env::Light l = gesture.active && gesture.tool == Tool::Light ? gesture.lightPreview : lights[index];
+  ImGui::Text("%s light %u", l.type == env::Light::Type::Directional ? "Directional" : "Point", index);
+  ImGui::PushItemWidth(220);
+  bool changed = false;
+  if (l.type == env::Light::Type::Directional) {
+    changed |= editVec3("direction", l.direction, 0.01f);
+    if (l.direction.squaredNorm() > 1e-8f) l.direction.normalize();
+    else l.direction = lights[index].direction;
+  } else {
+    changed |= editVec3("position (m)", l.position, 0.01f);
+  }
+  ImGui::SliderFloat("intensity", &l.intensity, 0.0f, 4.0f);
+  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  ImGui::PopItemWidth();
+  if (changed) apply(session::MoveLight{index, l});
+}
+
+void Studio::Impl::drawEmitterPanel(uint32_t index) {
+  const auto& emitters = session->environment().windField().settings().emitters;
+  if (index >= emitters.size()) {
+    selection = {};
+    return;
+  }
+  env::WindEmitter e = emitters[index];
+  ImGui::Text("Wind emitter %u", index);
+  ImGui::PushItemWidth(220);
+  bool changed = editVec3("position (m)", e.position, 0.01f);
+  changed |= editVec3("direction", e.direction, 0.01f);
+  if (e.direction.squaredNorm() > 1e-8f) e.direction.normalize();
+  else e.direction = emitters[index].direction;
+  ImGui::SliderFloat("speed (m/s)", &e.speed, 0.0f, 30.0f);
+  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  ImGui::SliderFloat("radius (m)", &e.radius, 0.01f, 5.0f);
+  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  ImGui::SliderFloat("reach (m)", &e.reach, 0.1f, 50.0f);
+  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  float spread = e.spread * 180.0f / kPi;
+  ImGui::SliderFloat("spread (deg)", &spread, 0.0f, 45.0f);
+  e.spread = spread * kPi / 180.0f;
+  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  ImGui::PopItemWidth();
+  if (changed) apply(session::EditEmitter{index, e});
+  if (ImGui::Button("Remove emitter")) {
+    if (apply(session::RemoveEmitter{index})) selection = {};
+  }
+}
+
+void Studio::Impl::drawStrokePanel(uint32_t index) {
+  const auto& strokes = session->environment().strokes();
+  if (index >= strokes.size()) {
+    selection = {};
+    return;
+  }
+  const env::Stroke& s = strokes[index];
+  ImGui::Text("%s stroke %u", s.attract ? "Attracting" : "Repelling", index);
+  ImGui::Text("%zu points, radius %.3f m, strength %.2f", s.points.size(), s.radius, s.strength);
+  ImGui::TextDisabled("Strokes are painted with the paint tools and removed with undo.");
+}
+
+void Studio::Impl::drawWindPanel() {
+  if (!ImGui::CollapsingHeader("Wind")) return;
+  const env::WindSettings& w = session->environment().windField().settings();
+  static const char* modes[] = {"constant", "gusty", "sph"};
+  int mode = std::clamp(int(w.mode), 0, 2);
+  ImGui::Text("mode %s, prevailing %.2f, %.2f, %.2f m/s", modes[mode], w.velocity.x(), w.velocity.y(), w.velocity.z());
+  ImGui::Text("%zu emitter(s)", w.emitters.size());
+  ImGui::Text("gusts: strength %.2f, period %.1f s, scale %.1f m", w.gustStrength, w.gustPeriod, w.gustScale);
+  if (const wind::SphAir* air = session->air()) ImGui::Text("simulated air: %zu particles", air->count());
+  ImGui::TextDisabled("Emitters are edited with the wind emitter tool and their panel;\n"
+                      "the prevailing wind comes from the scene file.");
+}
+
+void Studio::Impl::drawTimeline() {
+  if (ImGui::Button(playing ? "Pause" : "Play", ImVec2(70, 0))) playing = !playing;
+  ImGui::SameLine();
+  if (ImGui::Button("Step", ImVec2(60, 0))) stepOnce();
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(160);
+  ImGui::SliderInt("steps / frame", &speed, 1, 20);
+  ImGui::SameLine();
+  ImGui::Text("step %u", session->stepCount());
+  ImGui::SameLine(0, 30);
+  ImGui::BeginDisabled(!editor->canUndo() || editor->dragging());
+  if (ImGui::Button(fmt::format("Undo ({})", editor->undoDepth()).c_str())) undo();
+  ImGui::EndDisabled();
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!editor->canRedo() || editor->dragging());
+  if (ImGui::Button(fmt::format("Redo ({})", editor->redoDepth()).c_str())) redo();
+  ImGui::EndDisabled();
+  if (script) {
+    ImGui::SameLine(0, 30);
+    ImGui::Text("script %zu/%zu edits", nextScriptEdit, script->edits.size());
+  }
+}
+
+void Studio::Impl::drawStatus() {
+  const particles::ParticleWorld* world = session->particleWorld();
+  ImGui::Text("%zu particles  |  %zu segments  |  step %.1f ms  |  frame %.1f ms (sim %.1f, update %.1f, draw %.1f)  "
+              "|  %s  |",
+              world ? world->particleCount() : size_t(0), session->segmentCount(), lastStepMs, timing.frame,
+              timing.simulation, timing.update, timing.draw, toolName(tool));
+  ImGui::SameLine();
+  if (statusIsError) ImGui::TextColored(ImVec4(1, 0.45f, 0.4f, 1), "%s", status.c_str());
+  else ImGui::TextUnformatted(status.c_str());
+}
+
+}  // namespace tendril::studio

@@ -1,0 +1,126 @@
+// The studio's state shared by studio.cpp (frame loop, viewport tools) and panels.cpp (the
+// ImGui panels). Private to apps/studio.
+#pragma once
+
+#include "lsystem_panel.h"
+#include "studio.h"
+
+#include "tendril/session/edit.h"
+#include "tendril/session/edit_script.h"
+#include "tendril/session/session.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace tendril::studio {
+
+// A mouse gesture in the viewport with the left button, from press to release.
+struct Gesture {
+  bool active = false;
+  Tool tool = Tool::View;
+  Vec2 start = Vec2::Zero();
+  Vec2 last = Vec2::Zero();
+  // Drag: the particle's plant; paint: the stroke so far; move obstacle / light: the preview.
+  uint32_t plant = 0;
+  Vec3 anchor = Vec3::Zero();
+  env::Stroke stroke;
+  uint32_t obstacle = 0;
+  RigidTransform original, preview;
+  uint32_t light = 0;
+  env::Light lightPreview;
+};
+
+enum class FileAction { None, Open, Save, Export };
+
+struct Studio::Impl {
+  explicit Impl(const StudioOptions& options);
+
+  // studio.cpp
+  int run();
+  void openFile(const std::filesystem::path& path);
+  void saveFile(const std::filesystem::path& path);
+  void exportFile(const std::filesystem::path& path);
+  // Applies an edit through the library's Editor; an Error becomes the status line.
+  bool apply(const session::Edit& edit);
+  void undo();
+  void redo();
+  void stepOnce();
+  void simulate();
+  void handleKeys();
+  void handleViewportInput();
+  void beginGesture(const Vec2& pixel);
+  void moveGesture(const Vec2& pixel);
+  void endGesture(const Vec2& pixel);
+  void updateStress();
+  void drawViewport();
+  render::Ray rayAt(const Vec2& pixel) const;
+  Vec2 viewportPixel(float x, float y) const;
+
+  // panels.cpp
+  void layout();
+  void drawUi();
+  void drawMenu();
+  void drawTools();
+  void drawToolOptions();
+  void drawSceneTree();
+  void drawInspector();
+  void drawPlantPanel(uint32_t plant);
+  void drawParticleSpecies(uint32_t plant);
+  void drawObstaclePanel(uint32_t obstacle);
+  void drawLightPanel(uint32_t light);
+  void drawEmitterPanel(uint32_t emitter);
+  void drawStrokePanel(uint32_t stroke);
+  void drawWindPanel();
+  void drawTimeline();
+  void drawStatus();
+  void drawFileDialog();
+
+  StudioOptions options;
+  Window window;
+  std::unique_ptr<render::Renderer> renderer;
+  render::RenderSettings renderSettings;
+  ViewportTarget target;
+  std::unique_ptr<session::Session> session;
+  std::unique_ptr<session::Editor> editor;
+  std::optional<session::EditScript> script;
+  size_t nextScriptEdit = 0;
+  uint32_t scriptStart = 0;  // the editor's steps run when the script started
+  std::filesystem::path currentPath;
+
+  ViewportScene view;
+  render::Camera camera;
+  bool cameraFramed = false;
+  int viewportWidth = 1, viewportHeight = 1;  // framebuffer pixels
+  Rect viewport;                              // window units
+  Selection selection;
+  Tool tool = Tool::View;
+  Gesture gesture;
+  bool playing = true;
+  int speed = 1;
+  bool meshesChanged = true;
+  FrameTiming timing;
+  double lastStepMs = 0.0;
+  uint64_t frameCount = 0;
+  std::string status;
+  bool statusIsError = false;
+
+  // Tool settings.
+  int seedModel = 0;  // index into kSeedModels
+  std::string seedSpecies;
+  uint64_t nextSeed = 1;
+  float paintRadius = 0.15f;
+  float paintStrength = 1.0f;
+  float dragStrength = 0.5f;
+  float emitterSpeed = 4.0f;
+  float emitterRadius = 0.3f;
+
+  // Panels.
+  FileAction fileAction = FileAction::None;
+  std::string filePath;
+  LSystemPanel lsystemPanel;
+};
+
+inline constexpr const char* kSeedModels[] = {"particles", "climb", "lsystem", "graph"};
+
+}  // namespace tendril::studio
