@@ -14,7 +14,7 @@ constexpr size_t kPreviewModuleLimit = 200000;
 }  // namespace
 
 void LSystemPanel::open(uint32_t plant, const std::shared_ptr<const lsystem::Grammar>& grammar,
-                        std::optional<int> derivationLength, const Vec3& position) {
+                        std::optional<int> derivationLength, const Vec3& position, const env::Environment* env) {
   open_ = true;
   plant_ = plant;
   source_ = grammar->source;
@@ -22,6 +22,7 @@ void LSystemPanel::open(uint32_t plant, const std::shared_ptr<const lsystem::Gra
   derivationLength_ = derivationLength;
   steps_ = derivationLength.value_or(grammar->derivationLength);
   position_ = position;
+  env_ = env;
   rebuild();
 }
 
@@ -40,7 +41,7 @@ void LSystemPanel::rebuild() {
     run.start.position = position_ + Vec3(0.6f, 0.0f, 0.0f);
     Timer timer;
     lsystem::LSystem ls(grammar, run);
-    while (!ls.finished() && ls.string().size() < kPreviewModuleLimit) ls.step();
+    while (!ls.finished() && ls.string().size() < kPreviewModuleLimit) ls.step(env_);
     preview_ = ls.interpret();
     preview_->name = "preview";
     modules_ = ls.string().size();
@@ -57,7 +58,7 @@ void LSystemPanel::draw() {
   bool changed = ImGui::InputTextMultiline("##grammar", &text_, ImVec2(-1, ImGui::GetTextLineHeight() * 16),
                                            ImGuiInputTextFlags_AllowTabInput);
   ImGui::SetNextItemWidth(120);
-  changed |= ImGui::SliderInt("derivation steps", &steps_, 0, 20);
+  changed |= ImGui::DragInt("derivation steps", &steps_, 0.2f, 0, 100000);
   if (changed) rebuild();
   if (!error_.empty()) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.45f, 0.4f, 1.0f));

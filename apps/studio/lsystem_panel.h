@@ -14,9 +14,10 @@ namespace tendril::studio {
 
 class LSystemPanel {
  public:
-  // Shows `grammar` (the plant's) for the plant with index `plant` standing at `position`.
+  // Shows `grammar` (the plant's) for the plant with index `plant` standing at `position`;
+  // the preview's query modules are answered by `env` (which must outlive the panel's use).
   void open(uint32_t plant, const std::shared_ptr<const lsystem::Grammar>& grammar,
-            std::optional<int> derivationLength, const Vec3& position);
+            std::optional<int> derivationLength, const Vec3& position, const env::Environment* env);
   bool isOpenFor(uint32_t plant) const { return plant_ == plant && open_; }
   void close() { open_ = false; preview_.reset(); }
   // The ImGui contents (inside an open window).
@@ -34,6 +35,7 @@ class LSystemPanel {
   std::optional<int> derivationLength_;
   int steps_ = 0;
   Vec3 position_ = Vec3::Zero();
+  const env::Environment* env_ = nullptr;
   std::string error_;       // one-line message
   std::string diagnostic_;  // excerpt with a caret
   std::optional<plant::PlantModel> preview_;

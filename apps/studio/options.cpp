@@ -48,6 +48,16 @@ StudioOptions parseOptions(const std::vector<std::string>& args) {
       o.saveSession = value();
     } else if (a == "--size") {
       parseSize(value(), o);
+    } else if (a == "--select") {
+      o.select = value();
+      size_t colon = o.select.find(':');
+      const std::string kind = o.select.substr(0, colon);
+      if (colon == std::string::npos ||
+          (kind != "plant" && kind != "obstacle" && kind != "light" && kind != "emitter" && kind != "stroke"))
+        throw Error("command line", a,
+                    fmt::format("expected KIND:INDEX with KIND plant, obstacle, light, emitter or stroke (got \"{}\")",
+                                o.select));
+      parseInteger(o.select.substr(colon + 1), a, 0, 1000000);
     } else if (a == "--speed") {
       o.speed = int(parseInteger(value(), a, 1, 1000));
     } else if (a == "--stats") {
@@ -85,6 +95,7 @@ std::string usage() {
          "  --size WxH             window size in pixels (default 1600x900)\n"
          "  --speed K              growth steps per frame while playing (default 1)\n"
          "  --paused               start with the timeline paused (interactive runs)\n"
+         "  --select KIND:INDEX    select plant:N, obstacle:N, light:N, emitter:N or stroke:N at the start\n"
          "  --stats                print per-frame timing: simulation, scene update, GL draw\n"
          "  -h, --help             this text\n";
 }

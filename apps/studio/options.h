@@ -18,6 +18,7 @@ struct StudioOptions {
   std::string saveSession; // headless: session file written after the last frame
   int width = 1600;        // window size (pixels)
   int height = 900;
+  std::string select;      // "plant:0", "obstacle:1", ...: selected at the start (screenshots)
   int speed = 1;           // growth steps per frame while playing
   bool stats = false;      // per-frame timing on stdout
   bool paused = false;     // start paused (interactive mode)

@@ -274,7 +274,7 @@ void Studio::Impl::drawInspector() {
 void Studio::Impl::drawPlantPanel(uint32_t p) {
   const auto& plants = view.plants();
   if (p >= plants.size() || p >= session->plantCount()) {
-    selection = {};
+    ImGui::TextDisabled("(not in the scene now)");
     return;
   }
   const plant::PlantModel& m = plants[p];
@@ -292,7 +292,8 @@ void Studio::Impl::drawPlantPanel(uint32_t p) {
   }
   if (spec.model == "lsystem") {
     if (const auto* params = spec.paramsAs<lsystem::LSystemParams>()) {
-      if (!lsystemPanel.isOpenFor(p)) lsystemPanel.open(p, params->grammar, params->derivationLength, spec.position);
+      if (!lsystemPanel.isOpenFor(p)) lsystemPanel.open(p, params->grammar, params->derivationLength, spec.position,
+                                                      &session->environment());
       if (ImGui::CollapsingHeader("L-system editor", ImGuiTreeNodeFlags_DefaultOpen)) lsystemPanel.draw();
     }
   }
@@ -356,7 +357,7 @@ void Studio::Impl::drawParticleSpecies(uint32_t p) {
 void Studio::Impl::drawObstaclePanel(uint32_t id) {
   const env::Environment& env = session->environment();
   if (id >= env.obstacleCount()) {
-    selection = {};
+    ImGui::TextDisabled("(not in the scene now)");
     return;
   }
   const env::ObstacleInfo& info = env.obstacle(id);
@@ -379,7 +380,7 @@ void Studio::Impl::drawObstaclePanel(uint32_t id) {
 void Studio::Impl::drawLightPanel(uint32_t index) {
   const auto& lights = session->environment().lights();
   if (index >= lights.size()) {
-    selection = {};
+    ImGui::TextDisabled("(not in the scene now)");
     return;
   }
   env::Light l = gesture.active && gesture.tool == Tool::Light ? gesture.lightPreview : lights[index];
@@ -402,7 +403,7 @@ void Studio::Impl::drawLightPanel(uint32_t index) {
 void Studio::Impl::drawEmitterPanel(uint32_t index) {
   const auto& emitters = session->environment().windField().settings().emitters;
   if (index >= emitters.size()) {
-    selection = {};
+    ImGui::TextDisabled("(not in the scene now)");
     return;
   }
   env::WindEmitter e = emitters[index];
@@ -432,17 +433,19 @@ void Studio::Impl::drawEmitterPanel(uint32_t index) {
 void Studio::Impl::drawStrokePanel(uint32_t index) {
   const auto& strokes = session->environment().strokes();
   if (index >= strokes.size()) {
-    selection = {};
+    ImGui::TextDisabled("(not in the scene now)");
     return;
   }
   const env::Stroke& s = strokes[index];
   ImGui::Text("%s stroke %u", s.attract ? "Attracting" : "Repelling", index);
   ImGui::Text("%zu points, radius %.3f m, strength %.2f", s.points.size(), s.radius, s.strength);
-  ImGui::TextDisabled("Strokes are painted with the paint tools and removed with undo.");
+  ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+  ImGui::TextWrapped("Strokes are painted with the paint tools and removed with undo.");
+  ImGui::PopStyleColor();
 }
 
 void Studio::Impl::drawWindPanel() {
-  if (!ImGui::CollapsingHeader("Wind")) return;
+  if (!ImGui::CollapsingHeader("Wind", ImGuiTreeNodeFlags_DefaultOpen)) return;
   const env::WindSettings& w = session->environment().windField().settings();
   static const char* modes[] = {"constant", "gusty", "sph"};
   int mode = std::clamp(int(w.mode), 0, 2);
@@ -450,8 +453,10 @@ void Studio::Impl::drawWindPanel() {
   ImGui::Text("%zu emitter(s)", w.emitters.size());
   ImGui::Text("gusts: strength %.2f, period %.1f s, scale %.1f m", w.gustStrength, w.gustPeriod, w.gustScale);
   if (const wind::SphAir* air = session->air()) ImGui::Text("simulated air: %zu particles", air->count());
-  ImGui::TextDisabled("Emitters are edited with the wind emitter tool and their panel;\n"
-                      "the prevailing wind comes from the scene file.");
+  ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
+  ImGui::TextWrapped("Emitters are added with the wind emitter tool and edited in their panel; the prevailing "
+                     "wind comes from the scene file.");
+  ImGui::PopStyleColor();
 }
 
 void Studio::Impl::drawTimeline() {

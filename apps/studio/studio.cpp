@@ -46,6 +46,17 @@ Studio::Impl::Impl(const StudioOptions& o) : options(o), window(o.width, o.heigh
   playing = !o.paused || o.headless();
   openFile(o.input.empty() ? std::filesystem::path(TENDRIL_EXAMPLES_DIR) / "scenes/default.json"
                            : std::filesystem::path(o.input));
+  if (!o.select.empty()) {
+    const size_t colon = o.select.find(':');
+    const std::string kind = o.select.substr(0, colon);
+    const uint32_t index = uint32_t(std::stoul(o.select.substr(colon + 1)));
+    selection.kind = kind == "plant"      ? Selection::Kind::Plant
+                     : kind == "obstacle" ? Selection::Kind::Obstacle
+                     : kind == "light"    ? Selection::Kind::Light
+                     : kind == "emitter"  ? Selection::Kind::Emitter
+                                          : Selection::Kind::Stroke;
+    selection.index = index;
+  }
   if (!o.script.empty()) {
     script = session::loadEditScript(o.script);
     scriptStart = editor->stepsRun();
@@ -143,6 +154,8 @@ void Studio::Impl::simulate() {
         e.atStep = e.atStep > done ? e.atStep - done : 0;
         chunk.edits.push_back(std::move(e));
       }
+      for (const session::TimedEdit& e : chunk.edits)
+        if (const auto* drag = std::get_if<session::DragBegin>(&e.edit)) dragPlant = drag->plant;
       try {
         session::runEditScript(*editor, chunk, uint32_t(speed));
       } catch (const Error& e) {
@@ -287,6 +300,7 @@ void Studio::Impl::beginGesture(const Vec2& pixel) {
         return;
       }
       if (apply(session::DragBegin{node->plant, node->particle, node->point, dragStrength})) {
+        dragPlant = node->plant;
         gesture.active = true;
         gesture.plant = node->plant;
         gesture.anchor = node->point;
@@ -405,7 +419,6 @@ void Studio::Impl::endGesture(const Vec2& pixel) {
   switch (g.tool) {
     case Tool::Drag:
       apply(session::DragEnd{});
-      view.setStress(g.plant, {});
       return;
     case Tool::PaintAttract:
     case Tool::PaintRepel:
@@ -427,14 +440,19 @@ void Studio::Impl::endGesture(const Vec2& pixel) {
 // parent (seed 000 fig. 6), read from the particle world, scaled so that the species' breaking
 // strain is red.
 void Studio::Impl::updateStress() {
-  if (!gesture.active || gesture.tool != Tool::Drag) return;
+  if (!editor->dragging() || !dragPlant) {
+    if (dragPlant) view.setStress(*dragPlant, {});
+    dragPlant.reset();
+    return;
+  }
+  const uint32_t plant = *dragPlant;
   const auto& plants = view.plants();
-  if (gesture.plant >= plants.size()) return;
-  const plant::PlantModel& m = plants[gesture.plant];
+  if (plant >= plants.size()) return;
+  const plant::PlantModel& m = plants[plant];
   std::vector<float> stress(m.nodeCount(), 0.0f);
   float full = 0.5f;
   if (const particles::ParticleWorld* world = session->particleWorld()) {
-    const particles::ParticleSpecies& species = world->species(uint32_t(session->indexInSystem(gesture.plant)));
+    const particles::ParticleSpecies& species = world->species(uint32_t(session->indexInSystem(plant)));
     full = species.maxStrain * (species.breakThreshold > 0.0f ? 1.0f - species.breakThreshold : 1.0f);
   }
   // Centre distances against the chain's rest spacing (half lengths of both particles).
@@ -448,7 +466,7 @@ void Studio::Impl::updateStress() {
     float strain = std::abs((ci - cp).norm() - rest) / rest;
     stress[i] = std::clamp(strain / std::max(full, 1e-4f), 0.0f, 1.0f);
   }
-  view.setStress(gesture.plant, std::move(stress));
+  view.setStress(plant, std::move(stress));
 }
 
 void Studio::Impl::drawViewport() {

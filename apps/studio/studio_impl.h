@@ -96,6 +96,7 @@ struct Studio::Impl {
   Selection selection;
   Tool tool = Tool::View;
   Gesture gesture;
+  std::optional<uint32_t> dragPlant;  // the plant of the drag under way (interactive or scripted)
   bool playing = true;
   int speed = 1;
   bool meshesChanged = true;

@@ -3,6 +3,23 @@
 #include "tendril/core/timer.h"
 
 namespace tendril::studio {
+namespace {
+
+// The picked node and the nodes after it that descend from it: the branch a cut there takes
+// away (its whole subtree when the plant lists nodes depth first, as particle plants do).
+render::NodeRange subtree(const plant::PlantModel& m, uint32_t node) {
+  if (node >= m.nodeCount()) return {};
+  uint32_t end = node + 1;
+  while (end < m.nodeCount()) {
+    int32_t a = m.parent[end];
+    while (a > int32_t(node)) a = m.parent[size_t(a)];
+    if (a != int32_t(node)) break;
+    ++end;
+  }
+  return {node, end - node};
+}
+
+}  // namespace
 
 void ViewportScene::setStress(uint32_t plant, std::vector<float> stress) {
   if (stress_.size() <= plant) stress_.resize(plant + 1);
@@ -48,7 +65,7 @@ void ViewportScene::update(const session::Session& session, const Selection& sel
   for (uint32_t p = 0; p < plants_.size(); ++p) {
     render::PlantView view;
     view.model = &plants_[p];
-    if (selection.is(Selection::Kind::Plant, p)) view.selected = {0, uint32_t(plants_[p].nodeCount())};
+    if (selection.is(Selection::Kind::Plant, p) && selection.node) view.selected = subtree(plants_[p], *selection.node);
     scene_.plants.push_back(view);
   }
   scene_.lights = env.lights();
