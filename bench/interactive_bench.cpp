@@ -1,0 +1,114 @@
+// The studio's interactive frame without the GL draw: one simulation step of a particle scene,
+// the plant snapshots the viewport draws and the renderer's per-frame instance arrays
+// (render/plant_instances.h), for about 5k and 25k particles. The scenes are
+// bench/scenes/interactive-*.json (fast-growing ivies, so the setup takes a few hundred
+// steps). Results and commands: bench/README.md.
+#include "tendril/core/timer.h"
+#include "tendril/particles/world.h"
+#include "tendril/render/plant_instances.h"
+#include "tendril/session/session.h"
+
+#include <benchmark/benchmark.h>
+
+#include <time.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace tendril {
+namespace {
+
+// CPU time of the whole process, every thread (s): on a machine shared with other builds it
+// says what a frame costs better than the wall clock does.
+double processCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+struct Grown {
+  std::unique_ptr<session::Session> session;
+  double growSeconds = 0;
+};
+
+// Opens the scene and steps it until the particle world holds 97 % of `target` particles or
+// has stopped growing for 50 steps.
+Grown& grown(size_t target) {
+  static std::map<size_t, Grown> cache;
+  Grown& g = cache[target];
+  if (g.session) return g;
+  Timer t;
+  const char* file = target <= 5000 ? "interactive-5k.json" : "interactive-25k.json";
+  g.session = session::Session::open(std::filesystem::path(__FILE__).parent_path() / "scenes" / file);
+  const particles::ParticleWorld* world = g.session->particleWorld();
+  size_t last = 0;
+  for (int step = 0, still = 0; step < 3000 && world->particleCount() < target * 97 / 100 && still < 50; ++step) {
+    g.session->step();
+    still = world->particleCount() == last ? still + 1 : 0;
+    last = world->particleCount();
+  }
+  g.growSeconds = t.seconds();
+  return g;
+}
+
+void BM_InteractiveFrame(benchmark::State& state) {
+  Grown& g = grown(size_t(state.range(0)));
+  session::Session& s = *g.session;
+  std::vector<render::BranchInstance> branches;
+  std::vector<render::LeafInstance> leaves;
+  std::vector<double> total, stepMs, snapshotMs, instanceMs, cpu;
+  size_t nodes = 0, leafCount = 0;
+  for (auto _ : state) {
+    const double cpu0 = processCpuSeconds();
+    Timer t;
+    s.step();
+    const double step = t.seconds();
+    std::vector<plant::PlantModel> plants = s.plants();
+    const double snapshot = t.seconds() - step;
+    branches.clear();
+    leaves.clear();
+    for (const plant::PlantModel& p : plants) {
+      render::PlantView view;
+      view.model = &p;
+      render::appendBranchInstances(view, 0.0f, Vec3::Constant(0.5f), branches);
+      std::vector<float> layer(p.leafShapes.size(), 0.0f), aspect(p.leafShapes.size(), 1.0f);
+      std::vector<Vec3> tint(p.leafShapes.size(), Vec3::Ones());
+      render::appendLeafInstances(view, layer, aspect, tint, leaves);
+    }
+    const double seconds = t.seconds();
+    cpu.push_back(processCpuSeconds() - cpu0);
+    state.SetIterationTime(seconds);
+    total.push_back(seconds);
+    stepMs.push_back(step);
+    snapshotMs.push_back(snapshot);
+    instanceMs.push_back(seconds - step - snapshot);
+    nodes = branches.size();
+    leafCount = leaves.size();
+  }
+  auto medianMs = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2] * 1e3;
+  };
+  state.counters["particles"] = double(s.particleWorld()->particleCount());
+  state.counters["segments"] = double(nodes);
+  state.counters["leaves"] = double(leafCount);
+  state.counters["median_ms"] = medianMs(total);
+  state.counters["step_ms"] = medianMs(stepMs);
+  state.counters["snapshot_ms"] = medianMs(snapshotMs);
+  state.counters["instances_ms"] = medianMs(instanceMs);
+  state.counters["cpu_ms"] = medianMs(cpu);
+  state.counters["setup_s"] = g.growSeconds;
+}
+BENCHMARK(BM_InteractiveFrame)
+    ->Arg(5000)
+    ->Arg(25000)
+    ->ArgName("particles")
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(30);
+
+}  // namespace
+}  // namespace tendril
