@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 
 namespace tendril {
@@ -154,6 +155,185 @@ TEST(GrowthFlowClimb, WindBelowMinChangesNothing) {
   EXPECT_EQ(gusty, calm);
   uint64_t strong = plant::contentHash(growClimb(R"({"velocity": [8, 0, 0]})", steps));
   EXPECT_NE(strong, calm);
+}
+
+
+std::vector<plant::PlantModel> growParticles(const std::string& wind, int steps) {
+  // An ivy of oriented particles on a wide wall, the wind blowing along the wall (+X).
+  std::string json = std::string(R"({"tendril": 1, "seed": 4, "steps": )") + std::to_string(steps) +
+                     R"(, "environment": {"obstacles": [
+        {"name": "ground", "type": "plane", "size": [20, 20]},
+        {"name": "wall", "type": "wall", "size": [8, 4, 0.2]}],
+      "lights": [{"type": "directional", "direction": [0, -1, -0.4]}],
+      "wind": )" + wind + R"(},
+    "plants": [{"name": "ivy", "model": "particles", "position": [0, 0.05, 0.13], "seed": 3,
+                "species": {"base": "ivy-particles", "max_particles": 1500, "branch_probability": 0.3}}]})";
+  scene::Scene s = scene::parseScene(parseJson(json, "test scene"), "test scene", test::sourceDir());
+  session::Session session(std::move(s));
+  session.run(uint32_t(steps));
+  return session.plants();
+}
+
+// Internode generations from the plant's first apex (node 1 of a particle plant: its root is
+// node 0) to each node.
+std::vector<int> generations(const plant::PlantModel& p) {
+  std::vector<int> g(p.nodeCount(), 0);
+  for (size_t i = 1; i < p.nodeCount(); ++i) g[i] = p.parent[i] < 0 ? 0 : g[size_t(p.parent[i])] + (p.parent[i] > 0);
+  return g;
+}
+
+TEST(GrowthFlowParticles, WindAboveMaxGivesShorterThickerSmallerLeavedPlantsTurnedDownwind) {
+  const int steps = 1000;
+  plant::PlantModel calm = growParticles(R"({"velocity": [0, 0, 0]})", steps)[0];
+  plant::PlantModel windy = growParticles(R"({"velocity": [20, 0, 0]})", steps)[0];  // f(w) = 1
+  ASSERT_GT(calm.nodeCount(), 100u);
+  ASSERT_GT(windy.nodeCount(), 100u);
+  const std::vector<int> gc = generations(calm), gw = generations(windy);
+  std::vector<bool> hasChild(windy.nodeCount(), false), calmHasChild(calm.nodeCount(), false);
+  for (size_t i = 1; i < windy.nodeCount(); ++i)
+    if (windy.parent[i] >= 0) hasChild[size_t(windy.parent[i])] = true;
+  for (size_t i = 1; i < calm.nodeCount(); ++i)
+    if (calm.parent[i] >= 0) calmHasChild[size_t(calm.parent[i])] = true;
+
+  // Eq. 8: a full-grown internode (one with a successor) of generation g is 0.97^g of the
+  // species' particle length (0.05 m); in still air every one is 0.05 m.
+  size_t checked = 0;
+  for (size_t i = 1; i < windy.nodeCount(); ++i) {
+    if (!hasChild[i]) continue;
+    // (an apex counts as grown at 99.9 % of its length)
+    EXPECT_NEAR(windy.length[i] / (0.05 * std::pow(0.97, gw[i])), 1.0, 1.1e-3) << "node " << i << ", generation " << gw[i];
+    ++checked;
+  }
+  for (size_t i = 1; i < calm.nodeCount(); ++i)
+    if (calmHasChild[i]) EXPECT_NEAR(calm.length[i] / 0.05, 1.0, 1.1e-3) << "node " << i;
+  EXPECT_GT(checked, 50u);
+
+  // Eq. 16–17: leaves on an internode of generation g are ((1 + 0.01·1.5) / 1.01)^g as thick
+  // and at most 0.98^g as long as the species' (0.4 mm, 7 cm).
+  ASSERT_GT(windy.leafCount(), 20u);
+  ASSERT_GT(calm.leafCount(), 20u);
+  double calmSize = 0, windySize = 0;
+  int calmLeaves = 0, windyLeaves = 0;
+  for (size_t j = 0; j < windy.leafCount(); ++j) {
+    const int g = gw[size_t(windy.leafNode[j])];
+    EXPECT_NEAR(windy.leafThickness[j], 0.0004 * std::pow(1.015 / 1.01, g), 1e-9) << "leaf " << j;
+    EXPECT_LE(windy.leafSize[j], 0.07 * std::pow(0.98, g) * (1 + 1e-5)) << "leaf " << j;
+    if (g >= 10) windySize += windy.leafSize[j], ++windyLeaves;
+  }
+  for (size_t j = 0; j < calm.leafCount(); ++j) {
+    EXPECT_FLOAT_EQ(calm.leafThickness[j], 0.0004f);
+    if (gc[size_t(calm.leafNode[j])] >= 10) calmSize += calm.leafSize[j], ++calmLeaves;
+  }
+  ASSERT_GT(windyLeaves, 10);
+  ASSERT_GT(calmLeaves, 10);
+  EXPECT_LT(windySize / windyLeaves, 0.85 * calmSize / calmLeaves) << "mean leaf size from generation 10 on";
+
+  // Eq. 7: internodes are thicker generation for generation (mean radius per generation).
+  auto meanRadius = [](const plant::PlantModel& p, const std::vector<int>& g, int from, int to) {
+    double sum = 0;
+    int n = 0;
+    for (size_t i = 1; i < p.nodeCount(); ++i)
+      if (g[i] >= from && g[i] < to) sum += p.radius[i], ++n;
+    return n ? sum / n : 0.0;
+  };
+  for (int from : {5, 10, 15}) {
+    const double c = meanRadius(calm, gc, from, from + 5), w = meanRadius(windy, gw, from, from + 5);
+    ASSERT_GT(c, 0.0);
+    // Eq. 7 alone makes generation 5 (1.015/1.01)^5 ≈ 1.025 times thicker, later ones more;
+    // secondary growth (pipe model) adds to it (measured: 1.45, 1.60 and 1.05 times).
+    EXPECT_GT(w, c * std::pow(1.015 / 1.01, 5)) << "generations " << from << "–" << from + 4 << ": mean radius " << w
+                                                 << " m in wind, " << c << " m in still air";
+  }
+
+  // Eq. 9: from the 10th generation on, internodes point closer to the wind (+X).
+  auto meanDirection = [](const plant::PlantModel& p, const std::vector<int>& g) {
+    Vec3d d = Vec3d::Zero();
+    for (size_t i = 1; i < p.nodeCount(); ++i)
+      if (g[i] >= 10) d += p.direction(i).cast<double>();
+    return d.normalized();
+  };
+  const double calmAngle = std::acos(meanDirection(calm, gc).x()), windAngle = std::acos(meanDirection(windy, gw).x());
+  EXPECT_LT(windAngle, calmAngle - 0.2) << "angle to the wind: " << windAngle << " rad in wind, " << calmAngle
+                                         << " rad in still air";
+}
+
+TEST(GrowthFlowParticles, WindBelowMinChangesNothing) {
+  const int steps = 400;
+  uint64_t calm = plant::contentHash(growParticles(R"({"velocity": [0, 0, 0]})", steps));
+  uint64_t light = plant::contentHash(growParticles(R"({"velocity": [3.5, 0, 1]})", steps));  // 3.6 m/s < w_min = 4
+  EXPECT_EQ(light, calm);
+  uint64_t strong = plant::contentHash(growParticles(R"({"velocity": [8, 0, 0]})", steps));
+  EXPECT_NE(strong, calm);
+}
+
+
+plant::PlantModel growLSystem(const std::string& wind, const std::string& growthFlow = "") {
+  // ABOP's Lychnis coronaria: internodes and leaves that, once made, stay in the string.
+  std::string json = std::string(R"({"tendril": 1, "seed": 4, "steps": 30,
+    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [4, 4]}], "wind": )") + wind +
+                     R"(},
+    "plants": [{"name": "lychnis", "model": "lsystem", "grammar": "examples/grammars/abop-ch3-lychnis.ls",
+                "position": [0, 0, 0])" + growthFlow + R"(}]})";
+  scene::Scene s = scene::parseScene(parseJson(json, "test scene"), "test scene", test::sourceDir());
+  session::Session session(std::move(s));
+  session.run(30);
+  return session.plants()[0];
+}
+
+TEST(GrowthFlowLSystem, OrgansCarryTheFactorsOfTheWindTheyGrewIn) {
+  const plant::PlantModel calm = growLSystem(R"({"velocity": [0, 0, 0]})");
+  const plant::PlantModel windy = growLSystem(R"({"velocity": [20, 0, 0]})");  // f(w) = 1
+  // The wind changes no production of this grammar: the same nodes and leaves, in order.
+  ASSERT_EQ(windy.nodeCount(), calm.nodeCount());
+  ASSERT_EQ(windy.leafCount(), calm.leafCount());
+  ASSERT_GT(calm.nodeCount(), 100u);
+  ASSERT_GT(calm.leafCount(), 10u);
+  // An organ t derivation steps old has grown t units in the wind: eq. 8, 7, 17, 16.
+  size_t aged = 0;
+  for (size_t i = 0; i < calm.nodeCount(); ++i) {
+    const double t = calm.age[i];
+    ASSERT_EQ(windy.age[i], calm.age[i]);
+    EXPECT_NEAR(windy.length[i] / calm.length[i], std::pow(0.97, t), 1e-5) << "node " << i << ", age " << t;
+    EXPECT_NEAR(windy.radius[i] / calm.radius[i], std::pow(1.015 / 1.01, t), 1e-5) << "node " << i;
+    aged += t >= 10;
+  }
+  EXPECT_GT(aged, 20u);
+  // A leaf's age is not its segment's (internodes elongate below it), so read its age t from
+  // eq. 16 and check that it is a whole number of steps and that eq. 17 gives the same t.
+  size_t agedLeaves = 0;
+  for (size_t j = 0; j < calm.leafCount(); ++j) {
+    const double thicker = double(windy.leafThickness[j]) / double(calm.leafThickness[j]);
+    const double t = std::log(thicker) / std::log(1.015 / 1.01);
+    EXPECT_NEAR(t, std::round(t), 1e-2) << "leaf " << j;
+    EXPECT_NEAR(windy.leafSize[j] / calm.leafSize[j], std::pow(0.98, std::round(t)), 1e-5) << "leaf " << j;
+    agedLeaves += std::round(t) >= 5;
+  }
+  EXPECT_GT(agedLeaves, 5u);
+  // Eq. 9 and Algorithm 1: a segment t steps old is drawn turned toward the wind (+X) by
+  // α_t = 2° · 1.1^t from its still-air heading (which the turtle keeps), never past the wind.
+  size_t turned = 0;
+  for (size_t i = 0; i < calm.nodeCount(); ++i) {
+    const double still = std::acos(std::clamp(double(calm.direction(i).x()), -1.0, 1.0));
+    const double bent = std::acos(std::clamp(double(windy.direction(i).x()), -1.0, 1.0));
+    const double alpha =
+        calm.age[i] > 0.0f ? std::min(double(kPi), 2.0 * double(kPi) / 180.0 * std::pow(1.1, double(calm.age[i]))) : 0.0;
+    EXPECT_NEAR(bent, std::max(0.0, still - alpha), 2e-3) << "node " << i << ", age " << calm.age[i];
+    turned += alpha > 10.0 * double(kPi) / 180.0 && still > alpha;
+  }
+  EXPECT_GT(turned, 10u);
+}
+
+TEST(GrowthFlowLSystem, WindBelowMinChangesNothingAndStrongWindTearsLeavesOff) {
+  const uint64_t calm = plant::contentHash(growLSystem(R"({"velocity": [0, 0, 0]})"));
+  EXPECT_EQ(plant::contentHash(growLSystem(R"({"velocity": [3.5, 0, 1]})")), calm);  // 3.6 m/s < w_min
+  EXPECT_NE(plant::contentHash(growLSystem(R"({"velocity": [8, 0, 0]})")), calm);
+  // Leaves whose life saw a wind above c_p t_p = 20 m/s are gone (Algorithm 2); the species'
+  // strengths are plant keys.
+  EXPECT_GT(growLSystem(R"({"velocity": [19, 0, 0]})").leafCount(), 10u);
+  EXPECT_EQ(growLSystem(R"({"velocity": [25, 0, 0]})").leafCount(), 0u);
+  EXPECT_GT(growLSystem(R"({"velocity": [25, 0, 0]})", R"(, "growth_flow": {"petiole_strength": 2, "blade_strength": 2})")
+                .leafCount(),
+            10u);
 }
 
 }  // namespace

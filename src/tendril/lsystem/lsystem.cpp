@@ -32,7 +32,8 @@ LSystem::LSystem(LSystem&& o) noexcept
       current_(std::move(o.current_)),
       next_(std::move(o.next_)),
       scratch_(std::move(o.scratch_)),
-      answered_(o.answered_) {
+      answered_(o.answered_),
+      wind_(std::move(o.wind_)) {
   context_.globals = globals_.data();
 }
 LSystem& LSystem::operator=(LSystem&& o) noexcept {
@@ -46,6 +47,7 @@ LSystem& LSystem::operator=(LSystem&& o) noexcept {
   next_ = std::move(o.next_);
   scratch_ = std::move(o.scratch_);
   answered_ = o.answered_;
+  wind_ = std::move(o.wind_);
   context_.globals = globals_.data();
   return *this;
 }
@@ -63,6 +65,8 @@ InterpretOptions LSystem::interpretOptions() const {
   o.step = step_;
   o.stepTime = options_.stepTime;
   o.limits = context_.limits;
+  o.wind = &wind_;
+  o.growthFlow = &options_.growthFlow;
   return o;
 }
 
@@ -78,6 +82,11 @@ void LSystem::step(const env::Environment* env) {
   if (g.hasQueries && !answered_) answerQueries(env);
   ++step_;
   context_.step = step_;
+  // Growth-Flow: this step is one unit of growth time in the wind at the plant's base.
+  Vec3 wind = Vec3::Zero();
+  if (env && !env->windField().settings().calm())
+    wind = env->wind(options_.start.position, float(step_ - 1) * options_.stepTime);
+  wind_.record(wind, options_.growthFlow);
   block(g.startEach, "StartEach", 1);
   deriveStep(g, current_, next_, context_, scratch_);
   current_.swap(next_);

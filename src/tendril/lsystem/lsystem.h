@@ -36,6 +36,9 @@ struct RunOptions {
   std::optional<Limits> limits;         // default: the grammar's (max length:)
   TurtleStart start;                    // where the plant stands, for interpretation and queries
   float stepTime = 1.0f;                // seconds of node age per derivation step
+  // Growth-Flow constants (seed 001): each derivation step records the wind at the plant's
+  // start position as one unit of growth time, and interpretation applies it (InterpretOptions).
+  wind::GrowthFlowSpecies growthFlow;
 };
 
 class LSystem {
@@ -73,6 +76,8 @@ class LSystem {
 
   // The plant the current string draws.
   plant::PlantModel interpret() const;
+  // The wind recorded so far (one unit per derivation step).
+  const wind::GrowthFlowHistory& windHistory() const { return wind_; }
 
  private:
   InterpretOptions interpretOptions() const;
@@ -87,6 +92,7 @@ class LSystem {
   LString current_, next_;
   DeriveScratch scratch_;
   bool answered_ = false;
+  wind::GrowthFlowHistory wind_;
 };
 
 }  // namespace tendril::lsystem

@@ -25,6 +25,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
     o.start.position = spec.position;
     o.start.heading = spec.direction;
     o.stepTime = context_.stepTime;
+    o.growthFlow = params->growthFlow;
     try {
       auto ls = std::make_unique<LSystem>(params->grammar, o);
       ls->answerQueries(&env);
@@ -34,6 +35,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
       throw Error("", "/grammar", e.what());
     }
     names_.push_back(spec.name);
+    growthFlow_.push_back(params->growthFlow);
   }
 
   void step(const env::Environment& env) override {
@@ -54,6 +56,8 @@ class LSystemPlantSystem final : public models::PlantSystem {
     return m;
   }
 
+  wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return growthFlow_.at(plant); }
+
   size_t segmentCount() const override {
     size_t n = 0;
     for (const auto& p : plants_) n += p->segmentModules();
@@ -64,6 +68,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
   models::SystemContext context_;
   std::vector<std::unique_ptr<LSystem>> plants_;
   std::vector<std::string> names_;
+  std::vector<wind::GrowthFlowSpecies> growthFlow_;
 };
 
 std::shared_ptr<const scene::ModelParams> readLSystemPlant(JsonObject& o, const std::filesystem::path& baseDir) {
@@ -103,6 +108,7 @@ std::shared_ptr<const scene::ModelParams> readLSystemPlant(JsonObject& o, const 
   params->grammar = std::move(grammar);
   int64_t length = o.integer("derivation_length", -1, 0, 10'000'000);
   if (length >= 0) params->derivationLength = int(length);
+  if (auto g = o.optionalObject("growth_flow")) wind::readGrowthFlow(*g, params->growthFlow);
   return params;
 }
 

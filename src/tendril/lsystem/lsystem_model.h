@@ -14,6 +14,7 @@ namespace tendril::lsystem {
 struct LSystemParams : scene::ModelParams {
   std::shared_ptr<const Grammar> grammar;
   std::optional<int> derivationLength;  // "derivation_length": overrides the grammar's
+  wind::GrowthFlowSpecies growthFlow;   // "growth_flow": how it grows in the wind (seed 001)
 };
 
 models::ModelType lsystemModelType();

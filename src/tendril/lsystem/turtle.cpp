@@ -298,6 +298,23 @@ class Turtle {
       return;
     }
     orthonormalize();
+    const wind::GrowthFlowHistory::Factors flow = windFactors();
+    Vec3 stillH, stillL, stillU;
+    bool turned = false;
+    if (flow.active) {
+      len *= flow.length;
+      if (o_.growthFlow->maxLength > 0.0f) len = std::min(len, o_.growthFlow->maxLength);
+      const Vec3 bent = wind::windGrowthDirection(s.h, o_.wind->latestWind(), flow.angle);
+      if (bent != s.h) {
+        stillH = s.h, stillL = s.l, stillU = s.u;
+        turned = true;
+        const Quat turn = Quat::FromTwoVectors(s.h, bent);
+        s.h = bent;
+        s.l = (turn * s.l).normalized();
+        s.u = (turn * s.u).normalized();
+        orthonormalize();
+      }
+    }
     if (mode_ == Mode::Build) {
       if (!(s.width > 0.0f)) fail(id, p, n, fmt::format("segments need a width > 0, the turtle's is {:g} (set by ! or width:)", s.width));
       if (len < 0.0f) fail(id, p, n, "a segment's length must be >= 0");
@@ -305,7 +322,7 @@ class Turtle {
       d.position = s.pos;
       d.orientation = frameQuat();
       d.length = len;
-      d.radius = 0.5f * s.width;
+      d.radius = 0.5f * s.width * flow.radius;
       d.parent = s.node;
       d.age = float(o_.step - std::min(o_.step, birth_)) * o_.stepTime;
       d.order = s.order;
@@ -314,6 +331,11 @@ class Turtle {
     }
     s.newChain = false;
     moveTo(id, p, n, s.pos + s.h * len);
+    if (turned) {  // back to the still-air heading (Algorithm 1)
+      s.h = stillH;
+      s.l = stillL;
+      s.u = stillU;
+    }
     // ABOP §2.4: after each segment the heading bends toward T by α = e·|H × T|.
     if (s.elasticity != 0.0f) {
       Vec3 axis = s.h.cross(s.tropism);
@@ -447,9 +469,18 @@ class Turtle {
     }
   }
 
+  // Growth-Flow factors of the module being drawn (see InterpretOptions::wind).
+  wind::GrowthFlowHistory::Factors windFactors() const {
+    if (!o_.wind || !o_.growthFlow) return {};
+    return o_.wind->since(birth_, o_.step, *o_.growthFlow);
+  }
+
   void leaf(ModuleId id, const float* p, uint32_t n) {
     float size = n > 0 ? p[0] : g_.turtle.step;
     if (!(size > 0.0f)) return;  // a leaf of size 0 is not drawn
+    const wind::GrowthFlowHistory::Factors flow = windFactors();
+    if (flow.torn) return;  // torn off by a wind above its strength (Algorithm 2)
+    size *= flow.leafRadius;
     int shape = n > 1 ? int(std::floor(p[1])) : 0;
     if (shape < 0 || size_t(shape) >= g_.leafShapes.size())
       fail(id, p, n, fmt::format("leaf shape {} does not exist (the grammar has {} leaf shape{}, 0 to {})", shape,
@@ -478,7 +509,7 @@ class Turtle {
     leaf.rotation = (nodeRot.conjugate() * frameQuat()).normalized();
     leaf.size = size;
     leaf.petiole = petiole;
-    leaf.thickness = g_.turtle.leafThickness;
+    leaf.thickness = g_.turtle.leafThickness * flow.leafThickness;
     leaf.shape = uint16_t(shape);
     plant_.flags[size_t(s.node)] |= plant::kNodeLeafNode;
     plant_.addLeaf(leaf);

@@ -15,6 +15,7 @@
 #include "tendril/lsystem/grammar.h"
 #include "tendril/lsystem/lstring.h"
 #include "tendril/plant/plant_model.h"
+#include "tendril/wind/growth_flow.h"
 
 #include <utility>
 #include <vector>
@@ -36,6 +37,14 @@ struct InterpretOptions {
   uint32_t step = 0;       // the current derivation step (node ages count from module births)
   float stepTime = 1.0f;   // seconds of age per derivation step
   Limits limits;
+  // Growth-Flow (seed 001): the wind the plant grew in, one unit of growth time per derivation
+  // step, and its constants. A segment or leaf born in step b and drawn in step t has grown
+  // through steps b+1 … t: its length, radius, leaf size and thickness carry those steps'
+  // factors (eq. 7, 8, 16, 17), it is drawn turned toward the wind by eq. 9's α_t (Algorithm 1;
+  // the turtle keeps its still-air heading for what follows), and a leaf that lived through a
+  // wind above its strength is gone (Algorithm 2). Null: still air.
+  const wind::GrowthFlowHistory* wind = nullptr;
+  const wind::GrowthFlowSpecies* growthFlow = nullptr;
 };
 
 // The plant the string describes. Throws Error for run-time errors in interpretation rules and

@@ -3,6 +3,7 @@
 #include "tendril/core/parallel.h"
 #include "tendril/core/random.h"
 #include "tendril/particles/world.h"
+#include "tendril/wind/growth_flow.h"
 
 #include <algorithm>
 #include <cmath>
@@ -264,10 +265,48 @@ void ParticleWorld::grow(const env::Environment& env) {
       pl.capped = true;
       continue;
     }
+    // Growth-Flow (seed 001, Algorithm 1): each new internode is one unit of growth time. In a
+    // wind above the species' w_min the internodes that grow from this one are shorter (eq. 8)
+    // and thicker (eq. 7), bear smaller (eq. 17) and thicker (eq. 16) leaves, and turn downwind
+    // by the growth of eq. 9's angle, α_t − α_{t−1}, about b × w (the apex's own tropisms keep
+    // steering it between internodes); leaves are not grown where the wind would tear them off
+    // (Algorithm 2). A calm wind changes nothing.
+    wind::GrowthFlowStep flow;
+    Vec3 windHere = Vec3::Zero();
+    if (!env.windField().settings().calm()) {
+      windHere = env.wind(head(i), time_);
+      flow = wind::growthStep(windHere.norm(), s.growthFlow);
+    }
+    FlowState grown = flow_[i];
+    Quat windTurn = Quat::Identity();
+    if (flow.active()) {
+      const float before = grown.angle < 0.0f ? 0.0f : grown.angle;
+      grown.angle = wind::nextGrowthAngle(grown.angle < 0.0f ? s.growthFlow.angle0 : grown.angle, flow);
+      const Vec3 forward = q_[i] * Vec3::UnitY();
+      windTurn = Quat::FromTwoVectors(forward, wind::windGrowthDirection(forward, windHere, grown.angle - before));
+      grown.leafSize *= flow.leafRadius;
+      grown.leafThickness *= flow.leafThickness;
+    }
+    // Sets a new internode's Growth-Flow state, length and rest orientation after spawn().
+    auto windGrowth = [&](uint32_t c, const Quat& deformation) {
+      if (!flow.active()) return;
+      flow_[c] = grown;
+      float half = targetHalfLength_[i] * flow.length;
+      if (s.growthFlow.maxLength > 0.0f) half = std::min(half, 0.5f * s.growthFlow.maxLength);
+      targetHalfLength_[c] = half;
+      a_[c] = std::min(a_[c], half);
+      q_[c] = qp_[c] = (windTurn * q_[c]).normalized();
+      qr_[c] = (deformation.conjugate() * q_[c]).normalized();
+      groupRotation_[c] = (q_[c] * qr_[c].conjugate()).normalized();
+      x_[c] = xp_[c] = head(i) + q_[c] * Vec3(0, a_[c], 0);
+      xr_[c] = xr_[i] + qr_[i] * Vec3(0, a_[i], 0) + qr_[c] * Vec3(0, a_[c], 0);
+      updateMass(c);
+    };
     // The successor continues the branch.
     const uint32_t plantId = plant_[i];
     const Quat deform = (q_[i] * qr_[i].conjugate()).normalized();
-    uint32_t next = spawn(plantId, i, q_[i], qr_[i], b_[i] * s.apexTaper, kApex);
+    uint32_t next = spawn(plantId, i, q_[i], qr_[i], b_[i] * s.apexTaper * flow.radius, kApex);
+    windGrowth(next, deform);
     branchIndex_[next] = branchIndex_[i] + 1;
     // Lateral buds: up to B of them, each with probability BP, turned by up to V · 90°.
     Rng bud(RandomKey{pl.seed ^ mix64(settings_.seed), plantId, i, step_, kPurposeBud});
@@ -281,13 +320,18 @@ void ParticleWorld::grow(const env::Environment& env) {
       const Quat turn = axisAngle(axis, angle);
       const Quat q = (turn * q_[i]).normalized();
       uint32_t lateral = spawn(plantId, i, q, (deform.conjugate() * q).normalized(),
-                               b_[i] * s.thicknessFalloff, kApex);
+                               b_[i] * s.thicknessFalloff * flow.radius, kApex);
+      windGrowth(lateral, deform);
       order_[lateral] = static_cast<uint16_t>(order_[i] + 1);
       branchIndex_[lateral] = 1;
     }
     // Leaves: phyllotaxis angle and step along the branch, a little random jitter, turned
     // toward the light and away from a nearby surface.
-    if (s.leafStep > 0 && s.leafSize > 0.0f && !s.leafShapes.empty() && branchIndex_[i] % uint32_t(s.leafStep) == 0) {
+    const bool leafTorn = flow.active() && wind::leafDetaches(windHere.norm(), s.growthFlow);
+    if (s.leafStep > 0 && s.leafSize > 0.0f && !s.leafShapes.empty() && branchIndex_[i] % uint32_t(s.leafStep) == 0 &&
+        !leafTorn) {
+      const float leafSize = s.leafSize * flow_[i].leafSize;
+      const float leafThickness = s.leafThickness * flow_[i].leafThickness;
       Rng lr(RandomKey{pl.seed ^ mix64(settings_.seed), plantId, i, step_, kPurposeLeaf});
       const float around = float(branchIndex_[i]) * s.phyllotaxisAngle + s.leafJitter * lr.uniform(-1.0f, 1.0f);
       // Particle frame: the blade leaves the stem sideways (+Z turned `around` the stem), upper
@@ -303,15 +347,16 @@ void ParticleWorld::grow(const env::Environment& env) {
         // Small plants: the leaf is a particle of its own (§4.3), hanging from the stem.
         uint32_t leaf = spawn(plantId, i, world, (deform.conjugate() * world).normalized(),
                               std::max(s.leafThickness * 4.0f, s.minRadius), kLeaf);
-        targetHalfLength_[leaf] = 0.5f * s.leafSize;
-        a_[leaf] = 0.05f * s.leafSize;
+        targetHalfLength_[leaf] = 0.5f * leafSize;
+        a_[leaf] = 0.05f * leafSize;
+        flow_[leaf] = flow_[i];
         leafShape_[leaf] = shape;
         order_[leaf] = order_[i];
         x_[leaf] = xp_[leaf] = head(i) + world * Vec3(0, a_[leaf], 0);
         xr_[leaf] = xr_[i] + qr_[i] * Vec3(0, a_[i], 0) + qr_[leaf] * Vec3(0, a_[leaf], 0);
         updateMass(leaf);
       } else {
-        leaves_.push_back({i, (q_[i].conjugate() * world).normalized(), 0.05f * s.leafSize, s.leafSize, shape});
+        leaves_.push_back({i, (q_[i].conjugate() * world).normalized(), 0.05f * leafSize, leafSize, shape, leafThickness});
       }
     }
   }
@@ -346,7 +391,7 @@ void ParticleWorld::grow(const env::Environment& env) {
       if (!(flags_[i] & kActive) || !(flags_[i] & kLeaf) || plant_[i] != pid || parent_[i] == kNone) continue;
       const uint32_t p = parent_[i];
       leaves_.push_back({p, (q_[p].conjugate() * q_[i]).normalized(), 2.0f * a_[i], 2.0f * targetHalfLength_[i],
-                         leafShape_[i]});
+                         leafShape_[i], s.leafThickness * flow_[i].leafThickness});
       release(i);
     }
   }

@@ -31,6 +31,7 @@ uint32_t ParticleWorld::allocate() {
     flags_.resize(n), plant_.resize(n), parent_.resize(n), firstChild_.resize(n), nextSibling_.resize(n);
     targetHalfLength_.resize(n), restTime_.resize(n), anchor_.resize(n), anchorPhi_.resize(n);
     branchIndex_.resize(n), order_.resize(n), leafShape_.resize(n), leafTarget_.resize(n);
+    flow_.resize(n);
   }
   x_[i] = xp_[i] = v_[i] = w_[i] = xr_[i] = anchor_[i] = Vec3::Zero();
   q_[i] = qp_[i] = qr_[i] = groupRotation_[i] = Quat::Identity();
@@ -41,6 +42,7 @@ uint32_t ParticleWorld::allocate() {
   branchIndex_[i] = 0;
   order_[i] = 0;
   leafShape_[i] = 0;
+  flow_[i] = FlowState{};
   ++active_;
   return i;
 }
@@ -127,6 +129,7 @@ uint32_t ParticleWorld::spawn(uint32_t plant, uint32_t parent, Quat orientation,
     xr_[i] = xr_[parent] + qr_[parent] * Vec3(0, a_[parent], 0) + qr_[i] * Vec3(0, a_[i], 0);
     order_[i] = order_[parent];
     v_[i] = v_[parent];
+    flow_[i] = flow_[parent];
   }
   xp_[i] = x_[i];
   groupRotation_[i] = (q_[i] * qr_[i].conjugate()).normalized();
@@ -349,7 +352,7 @@ plant::PlantModel ParticleWorld::snapshot(uint32_t plantId) const {
     d.rotation = l.particleFromLeaf;
     d.size = l.size;
     d.petiole = pl.species.leafPetiole * (l.size / std::max(l.maxSize, 1e-6f));
-    d.thickness = pl.species.leafThickness;
+    d.thickness = l.thickness;
     d.shape = l.shape;
     m.addLeaf(d);
   }
@@ -365,7 +368,7 @@ plant::PlantModel ParticleWorld::snapshot(uint32_t plantId) const {
     d.rotation = (q_[p].conjugate() * q_[i]).normalized();
     d.size = 2.0f * a_[i];
     d.petiole = 0.0f;
-    d.thickness = pl.species.leafThickness;
+    d.thickness = pl.species.leafThickness * flow_[i].leafThickness;
     d.shape = leafShape_[i];
     m.addLeaf(d);
   }

@@ -69,6 +69,7 @@ struct AttachedLeaf {
   float size = 0.0f;     // current blade length (m)
   float maxSize = 0.0f;  // full-grown blade length (m)
   uint16_t shape = 0;
+  float thickness = 0.0f;  // blade thickness (m)
 };
 
 class ParticleWorld {
@@ -191,6 +192,16 @@ class ParticleWorld {
   std::vector<uint16_t> order_;        // branch order
   std::vector<uint16_t> leafShape_;
   std::vector<float> leafTarget_;      // leaf particles: full-grown blade length
+  // Growth-Flow (seed 001) state of the internode a particle is, relative to still air: its
+  // accumulated growth angle α (eq. 9; < 0 before the first windy internode) and the factors
+  // of eq. 17 and 16 its leaves grow with. Length (eq. 8) and radius (eq. 7) live in
+  // targetHalfLength_ and b_. Successors and laterals inherit it, times one step of wind.
+  struct FlowState {
+    float angle = -1.0f;
+    float leafSize = 1.0f;
+    float leafThickness = 1.0f;
+  };
+  std::vector<FlowState> flow_;
   std::vector<uint32_t> freeList_;
   std::vector<Vec3> externalAcceleration_;
   std::vector<AttachedLeaf> leaves_;

@@ -1,5 +1,6 @@
 #include "tendril/wind/growth_flow.h"
 
+#include "tendril/core/error.h"
 #include "tendril/core/json_reader.h"
 
 #include <algorithm>
@@ -106,6 +107,51 @@ Vec3 windGrowthDirection(const Vec3& direction, const Vec3& wind, float angle) {
 
 bool leafDetaches(float w, const GrowthFlowSpecies& s) {
   return w > s.strengthToWind * s.petioleStrength || w > s.strengthToWind * s.bladeStrength;
+}
+
+void GrowthFlowHistory::record(const Vec3& wind, const GrowthFlowSpecies& s) {
+  const float speed = wind.norm();
+  const GrowthFlowStep g = growthStep(speed, s);
+  Sums next = sums_.back();
+  if (g.active()) {
+    next.radius += std::log(double(g.radius));
+    next.length += std::log(double(g.length));
+    next.leafThickness += std::log(double(g.leafThickness));
+    next.leafRadius += std::log(double(g.leafRadius));
+    next.angle += std::log1p(double(g.angleGrowth));
+  }
+  sums_.push_back(next);
+  active_.push_back(active_.back() + (g.active() ? 1u : 0u));
+  torn_.push_back(torn_.back() + (g.active() && leafDetaches(speed, s) ? 1u : 0u));
+  wind_ = wind;
+}
+
+GrowthFlowHistory::Factors GrowthFlowHistory::since(uint32_t birth, uint32_t now, const GrowthFlowSpecies& s) const {
+  Factors f;
+  now = std::min(now, units());
+  birth = std::min(birth, now);
+  f.active = active_[now] > active_[birth];
+  if (!f.active) return f;  // exactly the still-air organ
+  f.torn = torn_[now] > torn_[birth];
+  const Sums& a = sums_[birth];
+  const Sums& b = sums_[now];
+  f.radius = float(std::exp(b.radius - a.radius));
+  f.length = float(std::exp(b.length - a.length));
+  f.leafThickness = float(std::exp(b.leafThickness - a.leafThickness));
+  f.leafRadius = float(std::exp(b.leafRadius - a.leafRadius));
+  // eq. 9 from α_0 over the windy units: α_t = α_0 Π (1 + Δα), at most π.
+  f.angle = float(std::min(double(kPi), double(s.angle0) * std::exp(b.angle - a.angle)));
+  return f;
+}
+
+void GrowthFlowHistory::restore(std::vector<Sums> sums, std::vector<uint32_t> active, std::vector<uint32_t> torn,
+                                const Vec3& wind) {
+  if (sums.empty() || sums.size() != active.size() || sums.size() != torn.size())
+    throw Error("", "", "inconsistent Growth-Flow history");
+  sums_ = std::move(sums);
+  active_ = std::move(active);
+  torn_ = std::move(torn);
+  wind_ = wind;
 }
 
 float bounceAngle(float angle, int8_t& sign, float w, float rate, float dt, float limit) {

@@ -26,6 +26,7 @@
 #include "tendril/core/math.h"
 
 #include <cstdint>
+#include <vector>
 
 namespace tendril {
 class JsonObject;
@@ -115,6 +116,46 @@ Vec3 windGrowthDirection(const Vec3& direction, const Vec3& wind, float angle);
 
 // Algorithm 2's detachment test.
 bool leafDetaches(float windSpeed, const GrowthFlowSpecies& s);
+
+// The wind a whole plant grew in, one record per unit of growth time, for models whose organs
+// are not grown one at a time but live in a string that is re-read (L-systems): an organ born
+// at unit b and seen at unit t has grown through units b+1 … t, and since(b, t) gives the
+// product of those units' growthStep factors (prefix sums of logarithms: O(1) per organ).
+class GrowthFlowHistory {
+ public:
+  struct Factors {
+    bool active = false;         // some unit of its life had f(w) > 0
+    bool torn = false;           // some unit's wind exceeded the leaf strength (Algorithm 2)
+    float radius = 1.0f;         // eq. 7 relative to still air
+    float length = 1.0f;         // eq. 8
+    float leafThickness = 1.0f;  // eq. 16
+    float leafRadius = 1.0f;     // eq. 17
+    float angle = 0.0f;          // eq. 9's α_t (0 when not active)
+  };
+
+  // Appends one unit of growth time in `wind`.
+  void record(const Vec3& wind, const GrowthFlowSpecies& s);
+  // Units recorded so far.
+  uint32_t units() const { return uint32_t(active_.size() - 1); }
+  // Factors of an organ born at unit `birth` (0 = before the first) seen at unit `now`.
+  Factors since(uint32_t birth, uint32_t now, const GrowthFlowSpecies& s) const;
+  // The wind of the latest unit (eq. 9 turns toward it); zero before the first.
+  const Vec3& latestWind() const { return wind_; }
+  // Every member, for saving and restoring a plant's state.
+  struct Sums {
+    double radius = 0, length = 0, leafThickness = 0, leafRadius = 0, angle = 0;
+  };
+  const std::vector<Sums>& sums() const { return sums_; }
+  const std::vector<uint32_t>& activeCounts() const { return active_; }
+  const std::vector<uint32_t>& tornCounts() const { return torn_; }
+  void restore(std::vector<Sums> sums, std::vector<uint32_t> active, std::vector<uint32_t> torn, const Vec3& wind);
+
+ private:
+  std::vector<Sums> sums_{Sums{}};    // prefix sums of log factors, entry u = units 1 … u
+  std::vector<uint32_t> active_{0};  // prefix counts of units with f > 0
+  std::vector<uint32_t> torn_{0};    // prefix counts of units that tear leaves off
+  Vec3 wind_ = Vec3::Zero();
+};
 
 // eq. 10–15: one angle with its direction of motion. Returns the new angle; flips `sign`
 // before the angle would leave [−limit, limit].

@@ -14,6 +14,18 @@ namespace {
 constexpr uint64_t kPhasePurpose = purposeId("wind.sway-phase");
 constexpr uint64_t kLeafPurpose = purposeId("wind.leaf-motion");
 
+// atan2(y, x) for y ≥ 0 to about 1e-5 rad (a minimax polynomial for atan on [0, 1]), for the
+// sway cap below: a tenth of the cost of the library's, the same on every machine.
+float atan2Upper(float y, float x) {
+  const float ax = std::fabs(x);
+  const float big = std::max(ax, y), small = std::min(ax, y);
+  if (!(big > 0.0f)) return 0.0f;
+  const float z = small / big, z2 = z * z;
+  float a = z * (0.99997726f + z2 * (-0.33262347f + z2 * (0.19354346f + z2 * (-0.11643287f + z2 * (0.05265332f + z2 * -0.01172120f)))));
+  if (y > ax) a = 0.5f * kPi - a;
+  return x < 0.0f ? kPi - a : a;
+}
+
 bool heldBySupport(uint32_t flags) {
   return (flags & (plant::kNodeClimbing | plant::kNodeAnchored)) != 0;
 }
@@ -29,6 +41,8 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
   phase_.resize(n);
   held_.resize(n);
   centre_.resize(n);
+  direction_.resize(n);
+  posed_.resize(n);
   force_.resize(n);
   angle_.assign(n, 0.0f);
   axis_.assign(n, Vec3::UnitX());
@@ -46,7 +60,8 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
     area_[i] = 2.0f * r * l;
     mass[i] = species_.woodDensity * kPi * r * r * l;
     held_[i] = heldBySupport(rest_.flags[i]);
-    centre_[i] = rest_.position[i] + 0.5f * l * rest_.direction(i);
+    direction_[i] = rest_.direction(i);
+    centre_[i] = rest_.position[i] + 0.5f * l * direction_[i];
   }
   std::vector<float> leafAreaOfNode(n, 0.0f);
   for (size_t j = 0; j < m; ++j) {
@@ -83,6 +98,47 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
     phase_[i] = Rng(RandomKey{settings_.seed, 0, c, 0, kPhasePurpose}).uniform(0.0f, kTwoPi);
     area_[i] += leafAreaOfNode[i];
   }
+  chainOf_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    if (chain[i] == int32_t(i)) chainStart_.push_back(uint32_t(i));
+    chainOf_[i] = chain[i] == int32_t(i) ? uint32_t(chainStart_.size() - 1) : chainOf_[size_t(chain[i])];
+  }
+  ease_.resize(chainStart_.size());
+  wind_.resize(n);
+  moment_.resize(n);
+  toWind_.resize(n);
+  turned_.resize(n);
+  leafKey_.resize(m);
+  for (size_t j = 0; j < m; ++j) leafKey_[j] = Rng(RandomKey{settings_.seed, 0, j, 0, kLeafPurpose}).key();
+
+  // Split the tree: a task is a subtree of at most `limit` nodes whose parent's subtree is
+  // larger; what is left is the top part (closed under parents).
+  std::vector<uint32_t> size(n, 1);
+  for (size_t i = n; i-- > 0;)
+    if (rest_.parent[i] >= 0) size[size_t(rest_.parent[i])] += size[i];
+  const uint32_t limit = uint32_t(std::max<size_t>(1024, n / 64));
+  std::vector<int32_t> taskOf(n, -1);
+  std::vector<uint32_t> roots;
+  for (size_t i = 0; i < n; ++i) {
+    const int32_t p = rest_.parent[i];
+    if (p >= 0 && taskOf[size_t(p)] >= 0) {
+      taskOf[i] = taskOf[size_t(p)];
+    } else if (size[i] <= limit) {
+      taskOf[i] = int32_t(roots.size());
+      roots.push_back(uint32_t(i));
+    }
+  }
+  std::vector<uint32_t> count(roots.size() + 1, 0);
+  for (size_t i = 0; i < n; ++i) {
+    if (taskOf[i] >= 0) ++count[size_t(taskOf[i]) + 1];
+    else topNodes_.push_back(uint32_t(i));
+    if (taskOf[i] < 0 || roots[size_t(taskOf[i])] == i) mergeNodes_.push_back(uint32_t(i));
+  }
+  for (size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
+  taskStart_ = count;
+  taskNodes_.resize(count.back());
+  for (size_t i = 0; i < n; ++i)
+    if (taskOf[i] >= 0) taskNodes_[count[size_t(taskOf[i])]++] = uint32_t(i);
 }
 
 void WindMotion::computeSway(float t, const env::WindField& wind) {
@@ -91,8 +147,9 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
   const bool loop = settings_.loopSeconds > 0.0f;
   const float half = 0.5f * settings_.airDensity * species_.dragCoefficient;
 
-  // F_w per node from the wind at its centre of gravity. A looping clip uses the steady wind
-  // (prevailing + emitters) with gusts that repeat: the gust noise is read on a circle.
+  // F_w per node from the wind at its centre of gravity, and its moment about the node. A
+  // looping clip uses the steady wind (prevailing + emitters) with gusts that repeat: the gust
+  // noise is read on a circle.
   parallelFor(size_t(0), n, [&](size_t i) {
     Vec3 w;
     if (!loop) {
@@ -108,142 +165,157 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
         w *= std::max(0.0f, 1.0f + ws.gustStrength * g);
       }
     }
-    Vec3 d = rest_.direction(i);
+    const Vec3& d = direction_[i];
     Vec3 wPerp = w - w.dot(d) * d;
     float leafA = area_[i] - 2.0f * rest_.radius[i] * rest_.length[i];
     force_[i] = half * (2.0f * rest_.radius[i] * rest_.length[i] * wPerp.norm() * wPerp + leafA * w.norm() * w);
-    axis_[i] = w;  // the wind at the node, for the axis below
-  });
+    moment_[i] = (centre_[i] - rest_.position[i]).cross(force_[i]);
+    wind_[i] = w;
+  }, 256);
+  // The sinusoidal ease of each chain (§3.1.1): θ = θ* (1 − cos φ) / 2.
+  parallelFor(size_t(0), chainStart_.size(), [&](size_t c) {
+    const size_t i = chainStart_[c];
+    ease_[c] = 0.5f * (1.0f - std::cos(kTwoPi * t / period_[i] + phase_[i]));
+  }, 1024);
 
-  // T_r: what the children pass back, as their total force and its moment about this node.
-  std::vector<Vec3> moment(n);
-  for (size_t i = 0; i < n; ++i) moment[i] = (centre_[i] - rest_.position[i]).cross(force_[i]);
-  for (size_t i = n; i-- > 0;) {
-    int32_t p = rest_.parent[i];
-    if (p < 0) continue;
-    size_t q = size_t(p);
-    moment[q] += moment[i] + (rest_.position[i] - rest_.position[q]).cross(force_[i]);
+  // T_r: what the children pass back, as their total force and its moment about this node;
+  // children in decreasing index order, within tasks in parallel, then the top part.
+  auto passBack = [&](size_t i) {
+    const size_t q = size_t(rest_.parent[i]);
+    moment_[q] += moment_[i] + (rest_.position[i] - rest_.position[q]).cross(force_[i]);
     force_[q] += force_[i];
-  }
+  };
+  parallelFor(size_t(0), taskStart_.size() - 1, [&](size_t k) {
+    for (size_t e = taskStart_[k + 1]; e-- > size_t(taskStart_[k]) + 1;) passBack(taskNodes_[e]);
+  }, 1);
+  for (size_t e = mergeNodes_.size(); e-- > 0;)
+    if (rest_.parent[mergeNodes_[e]] >= 0) passBack(mergeNodes_[e]);
 
-  std::vector<float> toWind(n, 0.0f);
-  std::vector<Quat> R(n, Quat::Identity());  // each node's own turn, before the cap below
   // The angle each node turns by: the moment against the segment's spring (eq. 1 balanced by
   // K), eased in and out over the chain's period, toward the wind about u = b × w.
   parallelFor(size_t(0), n, [&](size_t i) {
-    Vec3 w = axis_[i];
+    const Vec3& w = wind_[i];
     float speed = w.norm();
-    if (held_[i] || speed <= 0.0f) {
-      angle_[i] = 0.0f;
-      axis_[i] = Vec3::UnitX();
-      return;
-    }
-    Vec3 d = rest_.direction(i);
-    Vec3 u = d.cross(w / speed);
+    angle_[i] = 0.0f;
+    toWind_[i] = Vec2(0.0f, 1.0f);
+    axis_[i] = Vec3::UnitX();
+    if (held_[i] || speed <= 0.0f) return;
+    const Vec3& d = direction_[i];
+    const Vec3 wHat = w / speed;
+    Vec3 u = d.cross(wHat);
     float s = u.norm();
-    if (s < 1e-6f) {
-      angle_[i] = 0.0f;
-      axis_[i] = Vec3::UnitX();
-      return;
-    }
-    float steady = moment[i].norm() / stiffness_[i];
-    float ease = 0.5f * (1.0f - std::cos(kTwoPi * t / period_[i] + phase_[i]));
-    angle_[i] = std::min(steady, species_.maxSwayAngle) * ease;
-    toWind[i] = std::atan2(s, d.dot(w / speed));  // §3.1.1: acos(b·w / bw)
+    if (s < 1e-6f) return;
+    float steady = moment_[i].norm() / stiffness_[i];
+    angle_[i] = std::min(steady, species_.maxSwayAngle) * ease_[chainOf_[i]];
+    toWind_[i] = Vec2(s, d.dot(wHat));  // §3.1.1: the angle acos(b·w / bw), as sine and cosine
     axis_[i] = u / s;
-    R[i] = Quat(Eigen::AngleAxisf(angle_[i], axis_[i]));
-  });
+  }, 256);
 
   // Compose parents first: node i's subtree turns about p_i on top of its parent's motion.
   // A node never turns past the wind: the angles along its path are capped by its rest angle
   // to the wind.
-  std::vector<float> turned(n, 0.0f);
-  for (size_t i = 0; i < n; ++i) {
+  auto compose = [&](size_t i) {
     int32_t p = rest_.parent[i];
     Quat Qp = p < 0 ? Quat::Identity() : Q_[size_t(p)];
     Vec3 Tp = p < 0 ? Vec3::Zero() : T_[size_t(p)];
-    float before = p < 0 ? 0.0f : turned[size_t(p)];
+    float before = p < 0 ? 0.0f : turned_[size_t(p)];
     float a = angle_[i];
-    if (a > 0.0f && a > toWind[i] - before) {  // rare: recompute the capped turn
-      a = std::max(0.0f, toWind[i] - before);
-      angle_[i] = a;
-      R[i] = Quat(Eigen::AngleAxisf(a, axis_[i]));
+    // The angle to the wind is at least its sine: only a path turned further needs it exactly.
+    if (a > 0.0f && before + a > toWind_[i].x()) {
+      const float toWind = atan2Upper(toWind_[i].x(), toWind_[i].y());
+      if (a > toWind - before) {
+        a = std::max(0.0f, toWind - before);
+        angle_[i] = a;
+      }
     }
-    turned[i] = before + a;
-    Q_[i] = (Qp * R[i]).normalized();
-    T_[i] = Qp * rest_.position[i] + Tp - Q_[i] * rest_.position[i];
-  }
+    turned_[i] = before + a;
+    Q_[i] = a > 0.0f ? (Qp * Quat(Eigen::AngleAxisf(a, axis_[i]))).normalized() : Qp;
+    posed_[i] = Qp * rest_.position[i] + Tp;  // the node turns about its own base
+    T_[i] = posed_[i] - Q_[i] * rest_.position[i];
+  };
+  for (uint32_t i : topNodes_) compose(i);
+  parallelFor(size_t(0), taskStart_.size() - 1, [&](size_t k) {
+    for (size_t e = taskStart_[k]; e < taskStart_[k + 1]; ++e) compose(taskNodes_[e]);
+  }, 1);
 }
 
 void WindMotion::step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed) {
   computeSway(t, wind);
   const size_t n = rest_.nodeCount();
 
-  // Leaves: one motion type and one gust fraction per leaf and frame (Algorithm 2).
+  // Leaves: one motion type and one gust fraction per leaf and frame (Algorithm 2), in the wind
+  // of the node they hang on (gusts vary over metres, a leaf is centimetres from its node).
   const size_t m = rest_.leafCount();
   const uint32_t frame = frame_;
   parallelFor(size_t(0), m, [&](size_t j) {
     LeafMotionState& L = leaves_[j];
     if (L.detached) return;
-    Vec3 at = rest_.leafWorldPosition(j);
-    float w = wind.sample(at, t).norm();
-    Rng rng(RandomKey{settings_.seed, 0, j, frame, kLeafPurpose});
+    float w = wind_[size_t(rest_.leafNode[j])].norm();
+    Rng rng(mix64(leafKey_[j] ^ (uint64_t(frame) * 0x9e3779b97f4a7c15ull)));
     int type = int(rng.below(3));
     float gust = settings_.gustMin + (1.0f - settings_.gustMin) * rng.uniform();
     updateLeafMotion(L, type, w, gust, dt, species_);
-  });
+  }, 1024);
   ++frame_;
 
   // The posed plant: nodes moved rigidly with their subtree transforms, leaves carried along.
-  posed.name = rest_.name;
-  posed.species = rest_.species;
-  posed.bark = rest_.bark;
-  // Primitive meshes ride on their nodes unchanged: copy them once, not every frame.
-  if (posed.meshes.size() != rest_.meshes.size() || posed.primitives.size() != rest_.primitives.size()) {
+  // What does not move is copied into a new `posed` only.
+  const bool fresh = posedFor_ != &posed || posed.nodeCount() != n;
+  posedFor_ = &posed;
+  if (fresh) {
+    posed.name = rest_.name;
+    posed.species = rest_.species;
+    posed.bark = rest_.bark;
     posed.meshes = rest_.meshes;
     posed.primitives = rest_.primitives;
+    posed.leafShapes = rest_.leafShapes;
+    posed.position.resize(n);
+    posed.orientation.resize(n);
+    posed.length = rest_.length;
+    posed.radius = rest_.radius;
+    posed.parent = rest_.parent;
+    posed.age = rest_.age;
+    posed.order = rest_.order;
+    posed.flags = rest_.flags;
   }
-  posed.leafShapes = rest_.leafShapes;
-  posed.position.resize(n);
-  posed.orientation.resize(n);
-  posed.length = rest_.length;
-  posed.radius = rest_.radius;
-  posed.parent = rest_.parent;
-  posed.age = rest_.age;
-  posed.order = rest_.order;
-  posed.flags = rest_.flags;
   parallelFor(size_t(0), n, [&](size_t i) {
-    posed.position[i] = Q_[i] * rest_.position[i] + T_[i];
+    posed.position[i] = posed_[i];
     posed.orientation[i] = (Q_[i] * rest_.orientation[i]).normalized();
-  });
+  }, 1024);
 
-  // Leaves still attached, in order, written in parallel.
-  std::vector<uint32_t> kept;
-  kept.reserve(m);
+  // Leaves still attached, in order, written in parallel; their fixed fields only when the set
+  // changed.
+  const size_t before = kept_.size();
+  kept_.clear();
   for (size_t j = 0; j < m; ++j)
-    if (!leaves_[j].detached) kept.push_back(uint32_t(j));
-  const size_t k = kept.size();
-  posed.leafNode.resize(k);
-  posed.leafOffset.resize(k);
+    if (!leaves_[j].detached) kept_.push_back(uint32_t(j));
+  const size_t k = kept_.size();
+  const bool leavesChanged = fresh || k != before || posed.leafNode.size() != k;
+  if (leavesChanged) {
+    posed.leafNode.resize(k);
+    posed.leafOffset.resize(k);
+    posed.leafSize.resize(k);
+    posed.leafThickness.resize(k);
+    posed.leafPetiole.resize(k);
+    posed.leafShape.resize(k);
+  }
   posed.leafRotation.resize(k);
-  posed.leafSize.resize(k);
-  posed.leafThickness.resize(k);
-  posed.leafPetiole.resize(k);
-  posed.leafShape.resize(k);
   posed.leafMotion.resize(k);
   parallelFor(size_t(0), k, [&](size_t o) {
-    const size_t j = kept[o];
+    const size_t j = kept_[o];
     const LeafMotionState& L = leaves_[j];
     Quat motion = Quat(Eigen::AngleAxisf(L.twist, Vec3::UnitY())) *
                   Quat(Eigen::AngleAxisf(L.petioleBend + L.vibrate, Vec3::UnitX()));
-    posed.leafNode[o] = rest_.leafNode[j];
-    posed.leafOffset[o] = rest_.leafOffset[j];
     posed.leafRotation[o] = (rest_.leafRotation[j] * motion).normalized();
-    posed.leafSize[o] = rest_.leafSize[j];
-    posed.leafThickness[o] = rest_.leafThickness[j];
-    posed.leafPetiole[o] = rest_.leafPetiole[j];
-    posed.leafShape[o] = rest_.leafShape[j];
     posed.leafMotion[o] = Vec3(L.bladeBend, L.twist, L.vibrate);
+    if (leavesChanged) {
+      posed.leafNode[o] = rest_.leafNode[j];
+      posed.leafOffset[o] = rest_.leafOffset[j];
+      posed.leafSize[o] = rest_.leafSize[j];
+      posed.leafThickness[o] = rest_.leafThickness[j];
+      posed.leafPetiole[o] = rest_.leafPetiole[j];
+      posed.leafShape[o] = rest_.leafShape[j];
+    }
   }, 1024);
 }
 

@@ -17,7 +17,7 @@
 // it and do not sway; their free children do. The gust fraction scales the whole torque.
 //
 // Leaves. Each frame every leaf gets one random motion type (1/3 each, §4) and a gust fraction
-// l_s ∈ [gustMin, 1]; eq. 10–15 move its angles (growth_flow.h). A leaf's posed rotation is
+// l_s ∈ [gustMin, 1] of the wind at its node; eq. 10–15 move its angles (growth_flow.h). A leaf's posed rotation is
 // its rest rotation · R_Y(ψ) · R_X(θ + φ) (twist about the petiole, petiole bend and vibration
 // about the blade's width axis at the petiole); the blade bend β goes to leafMotion.x, where
 // the leaf mesh curls the blade, and leafMotion = (β, ψ, φ). Detached leaves are left out of
@@ -51,8 +51,8 @@ class WindMotion {
 
   // Advances one frame to time t (s) with frame length dt and writes the posed plant (the rest
   // plant with swayed nodes and moved leaves; detached leaves left out). Pass the same `posed`
-  // frame after frame: its primitive meshes are copied from the rest plant only when it has a
-  // different number of them.
+  // frame after frame and leave it unchanged in between: what does not move (lengths, radii,
+  // topology, primitive meshes) is copied from the rest plant only into a new `posed`.
   void step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed);
 
   // The sway angle of every node in the last step (rad) and its world axis.
@@ -79,15 +79,37 @@ class WindMotion {
   std::vector<float> phase_;       // rad, shared by a chain
   std::vector<uint8_t> held_;      // grows on a support: does not sway
   std::vector<Vec3> centre_;       // centre of gravity of the segment (world, rest)
+  std::vector<Vec3> direction_;    // unit segment direction b̂ (world, rest)
   // Per node, per step.
   std::vector<Vec3> force_;        // F_w + T_r
   std::vector<float> angle_;
   std::vector<Vec3> axis_;
   std::vector<Quat> Q_;
   std::vector<Vec3> T_;
+  std::vector<Vec3> posed_;        // the node's posed position, Q_p p + T_p
+  std::vector<Vec3> wind_;         // the wind at the node's centre of gravity
+  std::vector<Vec3> moment_;       // moment of F_w + T_r about the node
+  std::vector<Vec2> toWind_;       // sine and cosine of the rest angle between segment and wind
+  std::vector<float> turned_;      // angle turned along the path from the root
+  // Chains (a branch start and the nodes up to the next one) share period and phase: the ease
+  // of eq. 1's sinusoid is computed once per chain.
+  std::vector<uint32_t> chainOf_;     // per node: index into chainStart_
+  std::vector<uint32_t> chainStart_;  // per chain: its first node
+  std::vector<float> ease_;           // per chain, per step
+  // The tree split for parallel passes over parents and children: subtrees of at most a few
+  // thousand nodes (tasks, their nodes in index order) hang below a top part. Every node's
+  // arithmetic, sums over children included, happens in the same order as a sequential pass,
+  // so results do not depend on the split or the thread count.
+  std::vector<uint32_t> topNodes_;    // not in any task, ascending
+  std::vector<uint32_t> mergeNodes_;  // top nodes and task roots, ascending
+  std::vector<uint32_t> taskNodes_;   // every task's nodes, task after task, ascending within
+  std::vector<uint32_t> taskStart_;   // task k owns taskNodes_[taskStart_[k], taskStart_[k + 1])
   // Per leaf.
   std::vector<LeafMotionState> leaves_;
   std::vector<float> leafArea_;
+  std::vector<uint64_t> leafKey_;  // random key of the leaf's motion; each frame mixes in its number
+  std::vector<uint32_t> kept_;  // leaves still attached, in order
+  const plant::PlantModel* posedFor_ = nullptr;  // `posed` last written, its rest arrays copied
 };
 
 }  // namespace tendril::wind
