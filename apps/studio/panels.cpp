@@ -4,6 +4,7 @@
 #include "studio_impl.h"
 
 #include "tendril/core/error.h"
+#include "tendril/graph/graph_model.h"
 #include "tendril/lsystem/lsystem_model.h"
 #include "tendril/particles/world.h"
 
@@ -30,6 +31,30 @@ Vec3 degreesFromQuat(const Quat& q) {
   float x = std::atan2(r(2, 1), r(2, 2));
   float z = std::atan2(r(1, 0), r(0, 0));
   return Vec3(x, y, z) * (180.0f / kPi);
+}
+
+// One component of a p-graph and what it links to, as a tree (seed 004, Fig. 3): a link back
+// into a recursion shows the component's name and stops.
+void drawGraphComponent(const graph::Graph& g, const graph::Link& link, std::vector<bool>& onPath) {
+  if (link.target < 0 || size_t(link.target) >= g.components.size()) return;
+  const graph::Component& c = g.components[size_t(link.target)];
+  std::string label = fmt::format("{} ({}, {} link){}{}##c{}", c.name, graph::componentTypeName(c.type),
+                                  graph::linkTypeName(link.type), c.recursive ? ", recursion" : "",
+                                  c.depth > 0 ? fmt::format(" depth {}", c.depth) : std::string(), link.location);
+  if (onPath[size_t(link.target)]) {
+    ImGui::BulletText("%s (back to it)", c.name.c_str());
+    return;
+  }
+  if (c.links.empty()) {
+    ImGui::BulletText("%s", label.substr(0, label.find("##")).c_str());
+    return;
+  }
+  if (ImGui::TreeNodeEx(label.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
+    onPath[size_t(link.target)] = true;
+    for (const graph::Link& l : c.links) drawGraphComponent(g, l, onPath);
+    onPath[size_t(link.target)] = false;
+    ImGui::TreePop();
+  }
 }
 
 bool editVec3(const char* label, Vec3& v, float speed, const char* format = "%.3f") {
@@ -295,6 +320,20 @@ void Studio::Impl::drawPlantPanel(uint32_t p) {
       if (!lsystemPanel.isOpenFor(p)) lsystemPanel.open(p, params->grammar, params->derivationLength, spec.position,
                                                       &session->environment());
       if (ImGui::CollapsingHeader("L-system editor", ImGuiTreeNodeFlags_DefaultOpen)) lsystemPanel.draw();
+    }
+  }
+  if (spec.model == "graph") {
+    if (const auto* params = spec.paramsAs<graph::GraphPlantParams>(); params && params->graph) {
+      const graph::Graph& g = *params->graph;
+      if (ImGui::CollapsingHeader("p-graph (read-only)", ImGuiTreeNodeFlags_DefaultOpen)) {
+        ImGui::TextDisabled("%s: %zu components, seed %llu", g.source.c_str(), g.components.size(),
+                            (unsigned long long)g.seed);
+        std::vector<bool> onPath(g.components.size(), false);
+        if (ImGui::TreeNodeEx("camera (root)", ImGuiTreeNodeFlags_DefaultOpen)) {
+          for (const graph::Link& l : g.rootLinks) drawGraphComponent(g, l, onPath);
+          ImGui::TreePop();
+        }
+      }
     }
   }
   // Other models' settings cannot be changed live through the editor yet: shown as they are.

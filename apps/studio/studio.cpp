@@ -177,6 +177,12 @@ void Studio::Impl::simulate() {
   if (playing && speed > 0) lastStepMs = timing.simulation / speed;
 }
 
+// Six pixels at the depth of the camera's target, in metres: how close to a thin branch the
+// cursor must come to pick it.
+float Studio::Impl::pickTolerance() const {
+  return 6.0f * 2.0f * camera.distance() * std::tan(0.5f * camera.fovY) / float(std::max(1, viewportHeight));
+}
+
 render::Ray Studio::Impl::rayAt(const Vec2& pixel) const {
   return render::pixelRay(camera, viewportWidth, viewportHeight, pixel);
 }
@@ -242,7 +248,7 @@ void Studio::Impl::handleViewportInput() {
   if (leftOrbits && ImGui::IsMouseClicked(ImGuiMouseButton_Left) && io.MouseClickedCount[0] == 2) {
     // Double click selects what is under the cursor.
     render::Ray ray = rayAt(pixel);
-    if (auto node = session::pickNode(*session, ray.origin, ray.direction, 0.01f, camera.far))
+    if (auto node = session::pickNode(*session, ray.origin, ray.direction, pickTolerance(), camera.far))
       selection = {Selection::Kind::Plant, node->plant, node->node};
     else if (auto hit = session::pickSurface(*session, ray.origin, ray.direction, camera.far))
       selection = {Selection::Kind::Obstacle, hit->obstacle, std::nullopt};
@@ -274,7 +280,7 @@ void Studio::Impl::beginGesture(const Vec2& pixel) {
     case Tool::BranchSeed:
     case Tool::Cut:
     case Tool::Drag: {
-      auto node = session::pickNode(*session, ray.origin, ray.direction, 0.01f, camera.far);
+      auto node = session::pickNode(*session, ray.origin, ray.direction, pickTolerance(), camera.far);
       if (!node) {
         status = fmt::format("{}: click on a branch", toolName(tool));
         return;

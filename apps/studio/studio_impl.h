@@ -55,6 +55,7 @@ struct Studio::Impl {
   void updateStress();
   void drawViewport();
   render::Ray rayAt(const Vec2& pixel) const;
+  float pickTolerance() const;
   Vec2 viewportPixel(float x, float y) const;
 
   // panels.cpp
