@@ -26,6 +26,22 @@ float atan2Upper(float y, float x) {
   return x < 0.0f ? kPi - a : a;
 }
 
+// The rotation by `angle` about unit `axis`; sway angles are small, so their half-angle sine
+// and cosine come from short series (error < 1e-8 below 0.5 rad), the library beyond.
+Quat swayRotation(float angle, const Vec3& axis) {
+  const float h = 0.5f * angle;
+  float c, s;
+  if (std::fabs(h) < 0.5f) {
+    const float h2 = h * h;
+    s = h * (1.0f - h2 / 6.0f * (1.0f - h2 / 20.0f * (1.0f - h2 / 42.0f)));
+    c = 1.0f - h2 / 2.0f * (1.0f - h2 / 12.0f * (1.0f - h2 / 30.0f * (1.0f - h2 / 56.0f)));
+  } else {
+    s = std::sin(h);
+    c = std::cos(h);
+  }
+  return Quat(c, s * axis.x(), s * axis.y(), s * axis.z());
+}
+
 bool heldBySupport(uint32_t flags) {
   return (flags & (plant::kNodeClimbing | plant::kNodeAnchored)) != 0;
 }
@@ -150,9 +166,13 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
   // F_w per node from the wind at its centre of gravity, and its moment about the node. A
   // looping clip uses the steady wind (prevailing + emitters) with gusts that repeat: the gust
   // noise is read on a circle.
+  // A constant wind without emitters is the same everywhere: no need to ask the field.
+  const bool uniform = !loop && ws.mode == env::WindMode::Constant && ws.emitters.empty();
   parallelFor(size_t(0), n, [&](size_t i) {
     Vec3 w;
-    if (!loop) {
+    if (uniform) {
+      w = ws.velocity;
+    } else if (!loop) {
       w = wind.sample(centre_[i], t);
     } else {
       w = ws.velocity;
@@ -229,7 +249,7 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
       }
     }
     turned_[i] = before + a;
-    Q_[i] = a > 0.0f ? (Qp * Quat(Eigen::AngleAxisf(a, axis_[i]))).normalized() : Qp;
+    Q_[i] = a > 0.0f ? (Qp * swayRotation(a, axis_[i])).normalized() : Qp;
     posed_[i] = Qp * rest_.position[i] + Tp;  // the node turns about its own base
     T_[i] = posed_[i] - Q_[i] * rest_.position[i];
   };
