@@ -11,6 +11,8 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
 namespace tendril::wind {
 namespace {
@@ -208,6 +210,46 @@ TEST(WindAnimation, LoopingClipPassesTheValidatorAndRepeats) {
   double moved = 0;
   for (size_t i = 0; i < a.nodeCount(); ++i) moved = std::max(moved, double((a.tip(i) - c.tip(i)).norm()));
   EXPECT_GT(moved, 0.005);  // and it does move in between
+}
+
+TEST(WindAnimation, FrameSequenceCarriesTheLeavesOwnMotion) {
+  plant::PlantModel tree = leafyTree();
+  ASSERT_GT(tree.leafCount(), 0u);
+  GrowthFlowSpecies soft;
+  soft.youngModulus = 2e6f;
+  env::WindSettings g;
+  g.velocity = Vec3(8, 0, 0);
+  io::WindAnimationOptions o;
+  o.seconds = 0.5f;
+  o.fps = 8;
+  const std::filesystem::path dir = meshtest::exportTestDir() / "wind-frames";
+  std::filesystem::create_directories(dir);
+  std::vector<std::filesystem::path> files = io::writeWindFrames({{&tree, soft}}, env::WindField(g), o, dir, "tree");
+  ASSERT_EQ(files.size(), 4u);
+  EXPECT_EQ(files[0].filename(), "tree_0000.glb");
+  EXPECT_EQ(files[3].filename(), "tree_0003.glb");
+  for (const auto& f : {files[0], files[3]}) {
+    meshtest::GltfValidation v = meshtest::validateGltf(f);
+    EXPECT_EQ(v.errors, 0) << f << "\n" << v.output;
+  }
+  // Frame k is the posed plant of the clip's k-th step, leaves moving on their own.
+  MotionSettings ms;
+  ms.loopSeconds = 0.5f;
+  ms.seed = o.seed;
+  WindMotion motion(tree, soft, ms);
+  plant::PlantModel posed;
+  std::vector<Vec3> leafMotion;
+  for (int k = 0; k < 4; ++k) {
+    motion.step(0.125f * float(k), 0.125f, env::WindField(g), posed);
+    if (k == 0) leafMotion = posed.leafMotion;
+  }
+  EXPECT_NE(leafMotion, posed.leafMotion);
+  auto bytes = [](const std::filesystem::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_NE(bytes(files[0]), bytes(files[3])) << "the frames pose the plant differently";
+  EXPECT_THROW(io::writeWindFrames({{&tree, soft}}, env::WindField(g), io::WindAnimationOptions{0.0f}, dir, "x"), Error);
 }
 
 TEST(WindAnimation, BadOptionsAreAnError) {

@@ -361,4 +361,39 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
   return stats;
 }
 
+std::vector<std::filesystem::path> writeWindFrames(const std::vector<AnimatedPlant>& plants,
+                                                   const env::WindField& wind, const WindAnimationOptions& options,
+                                                   const std::filesystem::path& dir, const std::string& stem) {
+  if (!(options.seconds > 0.0f) || options.fps < 1)
+    throw Error(dir.string(), "", "wind frames need seconds > 0 and fps >= 1");
+  const int frames = std::max(1, int(std::lround(options.seconds * float(options.fps))));
+  const float dt = options.seconds / float(frames);
+  // The same motion as the clip (same loop and seeds), one posed plant per plant kept across
+  // frames so WindMotion writes only what moves.
+  std::vector<wind::WindMotion> motions;
+  motions.reserve(plants.size());
+  for (size_t pi = 0; pi < plants.size(); ++pi) {
+    if (!plants[pi].plant) throw Error(dir.string(), "", fmt::format("plant {} is missing", pi));
+    wind::MotionSettings ms;
+    ms.loopSeconds = options.seconds;
+    ms.seed = options.seed + pi;
+    motions.emplace_back(*plants[pi].plant, plants[pi].species, ms);
+  }
+  std::vector<plant::PlantModel> posed(plants.size());
+  ExportOptions exportOptions;
+  exportOptions.mesh = options.mesh;
+  std::vector<std::filesystem::path> written;
+  for (int k = 0; k < frames; ++k) {
+    ExportScene scene;
+    for (size_t pi = 0; pi < plants.size(); ++pi) {
+      motions[pi].step(float(k) * dt, dt, wind, posed[pi]);
+      scene.plants.push_back(posed[pi]);
+    }
+    std::filesystem::path file = dir / fmt::format("{}_{:04d}.glb", stem, k);
+    writeGlb(scene, file, exportOptions);
+    written.push_back(std::move(file));
+  }
+  return written;
+}
+
 }  // namespace tendril::io

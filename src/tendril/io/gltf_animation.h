@@ -49,4 +49,12 @@ std::vector<int32_t> chooseJoints(const plant::PlantModel& plant, int maxJoints)
 WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
                                          const WindAnimationOptions& options, const std::filesystem::path& path);
 
+// The per-step sequence: every frame of the same clip (seconds × fps frames, the same sway as
+// the looping clip) as a static .glb of the posed plants, with what skinning cannot carry —
+// leaves bending, twisting and vibrating (eq. 10–15) and leaves torn off (Algorithm 2).
+// Writes <dir>/<stem>_0000.glb, <stem>_0001.glb, … atomically and returns their paths.
+std::vector<std::filesystem::path> writeWindFrames(const std::vector<AnimatedPlant>& plants,
+                                                   const env::WindField& wind, const WindAnimationOptions& options,
+                                                   const std::filesystem::path& dir, const std::string& stem);
+
 }  // namespace tendril::io
