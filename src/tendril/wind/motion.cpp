@@ -28,13 +28,13 @@ float atan2Upper(float y, float x) {
 
 // The rotation by `angle` about unit `axis`; sway angles are small, so their half-angle sine
 // and cosine come from short series (error < 1e-8 below 0.5 rad), the library beyond.
-Quat swayRotation(float angle, const Vec3& axis) {
+inline Quat swayRotation(float angle, const Vec3& axis) {
   const float h = 0.5f * angle;
   float c, s;
   if (std::fabs(h) < 0.5f) {
     const float h2 = h * h;
-    s = h * (1.0f - h2 / 6.0f * (1.0f - h2 / 20.0f * (1.0f - h2 / 42.0f)));
-    c = 1.0f - h2 / 2.0f * (1.0f - h2 / 12.0f * (1.0f - h2 / 30.0f * (1.0f - h2 / 56.0f)));
+    s = h * (1.0f + h2 * (-1.0f / 6.0f + h2 * (1.0f / 120.0f + h2 * (-1.0f / 5040.0f))));
+    c = 1.0f + h2 * (-0.5f + h2 * (1.0f / 24.0f + h2 * (-1.0f / 720.0f + h2 * (1.0f / 40320.0f))));
   } else {
     s = std::sin(h);
     c = std::cos(h);
@@ -122,7 +122,6 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
   ease_.resize(chainStart_.size());
   wind_.resize(n);
   moment_.resize(n);
-  toWind_.resize(n);
   turned_.resize(n);
   leafKey_.resize(m);
   for (size_t j = 0; j < m; ++j) leafKey_[j] = Rng(RandomKey{settings_.seed, 0, j, 0, kLeafPurpose}).key();
@@ -211,45 +210,40 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
   for (size_t e = mergeNodes_.size(); e-- > 0;)
     if (rest_.parent[mergeNodes_[e]] >= 0) passBack(mergeNodes_[e]);
 
-  // The angle each node turns by: the moment against the segment's spring (eq. 1 balanced by
-  // K), eased in and out over the chain's period, toward the wind about u = b × w.
-  parallelFor(size_t(0), n, [&](size_t i) {
-    const Vec3& w = wind_[i];
-    float speed = w.norm();
-    angle_[i] = 0.0f;
-    toWind_[i] = Vec2(0.0f, 1.0f);
-    axis_[i] = Vec3::UnitX();
-    if (held_[i] || speed <= 0.0f) return;
-    const Vec3& d = direction_[i];
-    const Vec3 wHat = w / speed;
-    Vec3 u = d.cross(wHat);
-    float s = u.norm();
-    if (s < 1e-6f) return;
-    float steady = moment_[i].norm() / stiffness_[i];
-    angle_[i] = std::min(steady, species_.maxSwayAngle) * ease_[chainOf_[i]];
-    toWind_[i] = Vec2(s, d.dot(wHat));  // §3.1.1: the angle acos(b·w / bw), as sine and cosine
-    axis_[i] = u / s;
-  }, 256);
-
-  // Compose parents first: node i's subtree turns about p_i on top of its parent's motion.
-  // A node never turns past the wind: the angles along its path are capped by its rest angle
-  // to the wind.
+  // Compose parents first: node i's subtree turns about p_i on top of its parent's motion, by
+  // the angle of the moment against the segment's spring (eq. 1 balanced by K), eased in and
+  // out over the chain's period, toward the wind about u = b × w. A node never turns past the
+  // wind: the angles along its path are capped by its rest angle to the wind.
   auto compose = [&](size_t i) {
-    int32_t p = rest_.parent[i];
-    Quat Qp = p < 0 ? Quat::Identity() : Q_[size_t(p)];
-    Vec3 Tp = p < 0 ? Vec3::Zero() : T_[size_t(p)];
-    float before = p < 0 ? 0.0f : turned_[size_t(p)];
-    float a = angle_[i];
-    // The angle to the wind is at least its sine: only a path turned further needs it exactly.
-    if (a > 0.0f && before + a > toWind_[i].x()) {
-      const float toWind = atan2Upper(toWind_[i].x(), toWind_[i].y());
-      if (a > toWind - before) {
-        a = std::max(0.0f, toWind - before);
-        angle_[i] = a;
+    const int32_t p = rest_.parent[i];
+    const Quat Qp = p < 0 ? Quat::Identity() : Q_[size_t(p)];
+    const Vec3 Tp = p < 0 ? Vec3::Zero() : T_[size_t(p)];
+    const float before = p < 0 ? 0.0f : turned_[size_t(p)];
+    float a = 0.0f;
+    Vec3 axis = Vec3::UnitX();
+    const Vec3& w = wind_[i];
+    const float speed = w.norm();
+    if (!held_[i] && speed > 0.0f) {
+      const Vec3& d = direction_[i];
+      const Vec3 wHat = w * (1.0f / speed);
+      const Vec3 u = d.cross(wHat);
+      const float s = u.norm();
+      if (s >= 1e-6f) {
+        const float steady = moment_[i].norm() / stiffness_[i];
+        a = std::min(steady, species_.maxSwayAngle) * ease_[chainOf_[i]];
+        axis = u * (1.0f / s);
+        // §3.1.1's angle to the wind, acos(b·w / bw), is at least its sine s: only a path
+        // turned further needs it exactly.
+        if (a > 0.0f && before + a > s) {
+          const float toWind = atan2Upper(s, d.dot(wHat));
+          if (a > toWind - before) a = std::max(0.0f, toWind - before);
+        }
       }
     }
+    angle_[i] = a;
+    axis_[i] = axis;
     turned_[i] = before + a;
-    Q_[i] = a > 0.0f ? (Qp * swayRotation(a, axis_[i])).normalized() : Qp;
+    Q_[i] = a > 0.0f ? (Qp * swayRotation(a, axis)).normalized() : Qp;
     posed_[i] = Qp * rest_.position[i] + Tp;  // the node turns about its own base
     T_[i] = posed_[i] - Q_[i] * rest_.position[i];
   };
@@ -324,8 +318,7 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   parallelFor(size_t(0), k, [&](size_t o) {
     const size_t j = kept_[o];
     const LeafMotionState& L = leaves_[j];
-    Quat motion = Quat(Eigen::AngleAxisf(L.twist, Vec3::UnitY())) *
-                  Quat(Eigen::AngleAxisf(L.petioleBend + L.vibrate, Vec3::UnitX()));
+    const Quat motion = swayRotation(L.twist, Vec3::UnitY()) * swayRotation(L.petioleBend + L.vibrate, Vec3::UnitX());
     posed.leafRotation[o] = (rest_.leafRotation[j] * motion).normalized();
     posed.leafMotion[o] = Vec3(L.bladeBend, L.twist, L.vibrate);
     if (leavesChanged) {

@@ -89,7 +89,6 @@ class WindMotion {
   std::vector<Vec3> posed_;        // the node's posed position, Q_p p + T_p
   std::vector<Vec3> wind_;         // the wind at the node's centre of gravity
   std::vector<Vec3> moment_;       // moment of F_w + T_r about the node
-  std::vector<Vec2> toWind_;       // sine and cosine of the rest angle between segment and wind
   std::vector<float> turned_;      // angle turned along the path from the root
   // Chains (a branch start and the nodes up to the next one) share period and phase: the ease
   // of eq. 1's sinusoid is computed once per chain.
