@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <unordered_map>
 
 namespace tendril::studio {
 
@@ -442,35 +443,66 @@ void Studio::Impl::endGesture(const Vec2& pixel) {
   }
 }
 
-// Stress colours of the plant being dragged: each segment's strain |d − d̄| / d̄ against its
-// parent (seed 000 fig. 6), read from the particle world, scaled so that the species' breaking
-// strain is red.
+// Stress colours of the plant being dragged (seed 000 fig. 6): the strain |d − d̄| / d̄ of each
+// segment's connection to its parent, as the particle world measures it for breaking, minus
+// what it was when the drag began (growth alone leaves connections strained, and that is not
+// the drag's doing), scaled so that the species' breaking strain is red. Segments are matched
+// to their particles by position: a snapshot node's centre is its particle's position.
 void Studio::Impl::updateStress() {
   if (!editor->dragging() || !dragPlant) {
     if (dragPlant) view.setStress(*dragPlant, {});
     dragPlant.reset();
+    strainAtDragStart.clear();
     return;
   }
   const uint32_t plant = *dragPlant;
   const auto& plants = view.plants();
-  if (plant >= plants.size()) return;
+  const particles::ParticleWorld* world = session->particleWorld();
+  if (plant >= plants.size() || !world) return;
   const plant::PlantModel& m = plants[plant];
+  const uint32_t worldPlant = uint32_t(session->indexInSystem(plant));
+  const particles::ParticleSpecies& species = world->species(worldPlant);
+  const float full = std::max(1e-4f, species.maxStrain * (species.breakThreshold > 0.0f ? 1.0f - species.breakThreshold
+                                                                                        : 1.0f));
+  // Particles of the plant by position, in cells of 0.1 mm.
+  constexpr float kCell = 1e-4f;
+  auto cellOf = [](const Vec3& p) {
+    return Eigen::Vector3i(int(std::floor(p.x() / kCell)), int(std::floor(p.y() / kCell)), int(std::floor(p.z() / kCell)));
+  };
+  auto key = [](const Eigen::Vector3i& c) {
+    return (uint64_t(uint32_t(c.x()) & 0x1fffff) << 42) | (uint64_t(uint32_t(c.y()) & 0x1fffff) << 21) |
+           uint64_t(uint32_t(c.z()) & 0x1fffff);
+  };
+  std::unordered_multimap<uint64_t, uint32_t> byCell;
+  for (uint32_t i = 0; i < world->capacity(); ++i)
+    if (world->active(i) && world->plantOf(i) == worldPlant && !(world->flags(i) & particles::kLeaf))
+      byCell.emplace(key(cellOf(world->position(i))), i);
+  const bool first = strainAtDragStart.empty();
   std::vector<float> stress(m.nodeCount(), 0.0f);
-  float full = 0.5f;
-  if (const particles::ParticleWorld* world = session->particleWorld()) {
-    const particles::ParticleSpecies& species = world->species(uint32_t(session->indexInSystem(plant)));
-    full = species.maxStrain * (species.breakThreshold > 0.0f ? 1.0f - species.breakThreshold : 1.0f);
-  }
-  // Centre distances against the chain's rest spacing (half lengths of both particles).
-  for (size_t i = 0; i < m.nodeCount(); ++i) {
-    int32_t p = m.parent[i];
-    if (p < 0) continue;
-    Vec3 ci = m.position[i] + m.orientation[i] * Vec3(0, 0.5f * m.length[i], 0);
-    Vec3 cp = m.position[size_t(p)] + m.orientation[size_t(p)] * Vec3(0, 0.5f * m.length[size_t(p)], 0);
-    float rest = 0.5f * (m.length[i] + m.length[size_t(p)]);
-    if (rest <= 0.0f) continue;
-    float strain = std::abs((ci - cp).norm() - rest) / rest;
-    stress[i] = std::clamp(strain / std::max(full, 1e-4f), 0.0f, 1.0f);
+  for (size_t n = 0; n < m.nodeCount(); ++n) {
+    const Vec3 centre = m.position[n] + m.orientation[n] * Vec3(0, 0.5f * m.length[n], 0);
+    const Eigen::Vector3i c = cellOf(centre);
+    uint32_t best = particles::kNone;
+    float bestDistance = kCell;
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          auto range = byCell.equal_range(key(c + Eigen::Vector3i(dx, dy, dz)));
+          for (auto it = range.first; it != range.second; ++it) {
+            float d = (world->position(it->second) - centre).norm();
+            if (d < bestDistance) bestDistance = d, best = it->second;
+          }
+        }
+    // Growing apices are not judged for breaking either (particles/dynamics.cpp).
+    if (best == particles::kNone || (world->flags(best) & particles::kApex)) continue;
+    const float strain = world->strain(best);
+    if (first) {
+      strainAtDragStart[best] = strain;
+      continue;
+    }
+    auto before = strainAtDragStart.find(best);
+    if (before == strainAtDragStart.end()) continue;  // grew during the drag
+    stress[n] = std::clamp((strain - before->second) / full, 0.0f, 1.0f);
   }
   view.setStress(plant, std::move(stress));
 }

@@ -10,6 +10,7 @@
 #include "tendril/session/session.h"
 
 #include <optional>
+#include <unordered_map>
 #include <string>
 #include <vector>
 
@@ -98,6 +99,7 @@ struct Studio::Impl {
   Tool tool = Tool::View;
   Gesture gesture;
   std::optional<uint32_t> dragPlant;  // the plant of the drag under way (interactive or scripted)
+  std::unordered_map<uint32_t, float> strainAtDragStart;  // particle id → strain when it began
   bool playing = true;
   int speed = 1;
   bool meshesChanged = true;
