@@ -22,8 +22,13 @@
 #include <fmt/format.h>
 #include <tbb/parallel_reduce.h>
 
+#if defined(__SSE__)
+#include <xmmintrin.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace tendril::wind {
@@ -34,6 +39,7 @@ constexpr float kInf = std::numeric_limits<float>::infinity();
 constexpr uint32_t kDead = std::numeric_limits<uint32_t>::max();
 constexpr size_t kMaxCells = size_t(1) << 25;  // uniform-grid cells (128 MiB of cell starts)
 constexpr size_t kGrain = 256;
+constexpr size_t kBlock = 256;  // particles per neighbour-list block
 
 // Unit-support kernel constants (multiply by 1/h³, 1/h⁴, 1/h⁵ as noted above).
 constexpr float kPoly6 = 315.0f / (64.0f * kPi);
@@ -44,6 +50,41 @@ constexpr float kVisc = 45.0f / kPi;
 // (up to √3 along a cell diagonal): a particle's known distance bound shrinks by this much
 // per metre moved.
 constexpr float kSdfLipschitz = 1.75f;
+
+// Four floats or ints (GCC/Clang vector extensions: SSE on x86-64, NEON on ARM).
+using V4f = float __attribute__((vector_size(16)));
+using V4i = int32_t __attribute__((vector_size(16)));
+constexpr V4i kLanes = {0, 1, 2, 3};
+inline V4f splat(float v) { return V4f{v, v, v, v}; }
+inline V4f load4(const float* p) {
+  V4f v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+// v where the mask is set, else 0 (and 0 where v ≤ 0).
+inline V4f select(V4i mask, V4f v) {
+  mask &= (v > 0.0f);
+  return (V4f)(mask & (V4i)v);
+}
+
+// v where the mask is set, else 0 (whatever v is there, NaN included).
+inline V4f masked(V4i mask, V4f v) { return (V4f)(mask & (V4i)v); }
+inline V4f sqrt4(V4f v) {
+#if defined(__SSE__)
+  return (V4f)_mm_sqrt_ps((__m128)v);
+#else
+  return V4f{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
+#endif
+}
+// Rows a, b, c, d of a 4 × 4 matrix to its columns.
+inline void transpose(V4f a, V4f b, V4f c, V4f d, V4f* x, V4f* y, V4f* z, V4f* w) {
+  const V4f t0 = __builtin_shufflevector(a, b, 0, 4, 1, 5), t1 = __builtin_shufflevector(c, d, 0, 4, 1, 5);
+  const V4f t2 = __builtin_shufflevector(a, b, 2, 6, 3, 7), t3 = __builtin_shufflevector(c, d, 2, 6, 3, 7);
+  *x = __builtin_shufflevector(t0, t1, 0, 1, 4, 5);
+  *y = __builtin_shufflevector(t0, t1, 2, 3, 6, 7);
+  *z = __builtin_shufflevector(t2, t3, 0, 1, 4, 5);
+  *w = __builtin_shufflevector(t2, t3, 2, 3, 6, 7);
+}
 
 Error settingError(const char* key, const std::string& message) { return Error("SPH settings", key, message); }
 
@@ -58,28 +99,37 @@ void checkRange(const char* key, float v, float lo, float hi, const char* unit) 
 
 }  // namespace
 
-// A uniform grid of cells of edge h over the domain, rebuilt by counting sort after every
-// substep, and the particles' state copied into grid order (structure of arrays), so that a
-// particle's neighbours lie in nine contiguous runs (three x-adjacent cells each).
+// A uniform grid over the domain, cells of edge h/2 (h when that would be too many cells),
+// rebuilt by counting sort after every substep, and the particles' state copied into grid
+// order (structure of arrays), so that a particle's neighbours lie in contiguous runs (one per
+// row of x-adjacent cells), each run clipped to the sphere of radius h around it.
 struct SphAir::Grid {
   Vec3 origin = Vec3::Zero();
-  float inv = 1.0f;  // 1 / cell edge
+  float edge = 1.0f, inv = 1.0f;  // cell edge, 1 / cell edge
   Eigen::Vector3i dims = Eigen::Vector3i::Ones();
   std::vector<uint32_t> cellOf;  // per particle (kDead: not in the grid)
   std::vector<uint32_t> start;   // per cell + 1
   std::vector<uint32_t> order;   // grid index → particle index
   // Grid-ordered copies.
   std::vector<float> px, py, pz, vx, vy, vz, rho, pressure, sdf;
+  std::vector<float> invRho, pOverRho;  // 1/ρ and p/ρ, from the equation of state
+  // The same packed per particle for the forces' 4-wide gathers: (x, y, z, 1/ρ), (v, p/ρ).
+  std::vector<V4f> packedX, packedV;
   std::vector<Vec3> sdfNormal;
   // Grid-ordered results of a substep.
   std::vector<Vec3> acc, dragAcc;
   std::vector<float> dragRate;  // Σ φ k / m (1/s): the implicit factor of the drag
+  // Per substep, gathered in the density pass and reused by the forces: the air neighbours
+  // (0 < r < h, grid order) and the plant particles whose support holds the particle. Stored
+  // per block of kBlock particles (a fixed split of the grid order, whatever the thread count),
+  // each particle's entries contiguous in its block's buffer.
+  std::vector<std::vector<uint32_t>> nbrBlocks, hitBlocks;
+  std::vector<uint32_t> nbrBegin, nbrCount, hitBegin, hitCount;
 
   size_t size() const { return order.size(); }
+  int cellAxis(float v, int k) const { return std::clamp(int(std::floor((v - origin[k]) * inv)), 0, dims[k] - 1); }
   Eigen::Vector3i cellCoord(const Vec3& p) const {
-    Eigen::Vector3i c;
-    for (int k = 0; k < 3; ++k) c[k] = std::clamp(int(std::floor((p[k] - origin[k]) * inv)), 0, dims[k] - 1);
-    return c;
+    return Eigen::Vector3i(cellAxis(p.x(), 0), cellAxis(p.y(), 1), cellAxis(p.z(), 2));
   }
   uint32_t cellIndex(int x, int y, int z) const { return uint32_t((size_t(z) * dims.y() + y) * dims.x() + x); }
   // Calls f(begin, end) for the grid-index runs (one per row of x-adjacent cells) of the box lo..hi.
@@ -91,17 +141,52 @@ struct SphAir::Grid {
         if (b < e) f(b, e);
       }
   }
+  // The gap between v and the slab of cell c along axis k (0 inside it); the outermost cells
+  // reach to infinity, as particles outside the domain are binned into them.
+  float gap(float v, int k, int c) const {
+    const float lo = origin[k] + float(c) * edge;
+    if (c > 0 && v < lo) return lo - v;
+    if (c < dims[k] - 1 && v > lo + edge) return v - (lo + edge);
+    return 0.0f;
+  }
+  // Calls f(begin, end) for runs holding every particle closer than r to (x, y, z): the rows of
+  // cells the sphere meets, each clipped to the cells along x the sphere meets.
   template <class F>
-  void forNeighbourRuns(const Vec3& p, F&& f) const {
-    const Eigen::Vector3i c = cellCoord(p);
-    const Eigen::Vector3i lo = (c.array() - 1).max(0).matrix();
-    const Eigen::Vector3i hi = (c.array() + 1).min(dims.array() - 1).matrix();
-    forRuns(lo, hi, f);
+  void forSphereRuns(float x, float y, float z, float r, F&& f) const {
+    constexpr int kMax = 8;  // r ≤ 2 (1 + 1e-5) cell edges: at most 6 cells per axis
+    const float r2 = r * r;
+    int lo[3], n[3];
+    float g2[3][kMax];
+    const float p[3] = {x, y, z};
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = cellAxis(p[k] - r, k);
+      n[k] = std::min(cellAxis(p[k] + r, k) - lo[k] + 1, kMax);
+      for (int c = 0; c < n[k]; ++c) {
+        const float d = gap(p[k], k, lo[k] + c);
+        g2[k][c] = d * d;
+      }
+    }
+    for (int cz = 0; cz < n[2]; ++cz) {
+      const float rz = r2 - g2[2][cz];
+      if (!(rz > 0.0f)) continue;
+      for (int cy = 0; cy < n[1]; ++cy) {
+        const float rem = rz - g2[1][cy];
+        if (!(rem > 0.0f)) continue;
+        int x0 = 0, x1 = n[0] - 1;
+        while (x0 < x1 && !(g2[0][x0] < rem)) ++x0;
+        while (x1 > x0 && !(g2[0][x1] < rem)) --x1;
+        const uint32_t row = cellIndex(lo[0], lo[1] + cy, lo[2] + cz);
+        const uint32_t b = start[row + uint32_t(x0)], e = start[row + uint32_t(x1) + 1];
+        if (b < e) f(b, e);
+      }
+    }
   }
 };
 
-// Grown branch particles of the plants that can reach the air, in the order of their own
-// grid (cell edge = the largest support reach), with what the coupling needs.
+// Grown branch particles of the plants that can reach the air, in the order of their cells,
+// with what the coupling needs, and binned for the air: every cell of the air's grid lists the
+// plant particles whose support's bounding box meets it (built once per frame: the plants do
+// not move within a frame), so an air particle's candidates are its own cell's list.
 struct SphAir::Plants {
   std::vector<uint32_t> slot;  // particle id in the ParticleWorld
   std::vector<Vec3> x, axis, v;
@@ -110,33 +195,17 @@ struct SphAir::Plants {
   std::vector<float> volume;        // Ψ = 4/3 π a b² (m³)
   std::vector<float> dragK;         // k = ½ ρ C_d A |u⊥| (kg/s), fixed over a frame
   std::vector<float> invZ;          // 1 / max(Σ V W, ½), fixed over a frame
-  std::vector<float> reach;         // α, the largest semi-axis
-  Vec3 origin = Vec3::Zero();
-  float inv = 1.0f;
-  Eigen::Vector3i dims = Eigen::Vector3i::Ones();
-  std::vector<uint32_t> start;
+  std::vector<Vec3> extent;         // half-extents of the support's bounding box
+  // The same packed for 4-wide gathers: (x, 1/α²), (axis, 1/β²), (v, k/max(Z, ½)), (det G, Ψ, 0, 0).
+  std::vector<V4f> packX, packAxis, packV, packG;
+  std::vector<uint32_t> start;      // per air-grid cell + 1
+  std::vector<uint32_t> entries;    // plant indices per cell
 
   size_t size() const { return slot.size(); }
   void clear() {
     slot.clear(), x.clear(), axis.clear(), v.clear(), invA2.clear(), invB2.clear(), detG.clear();
-    volume.clear(), dragK.clear(), invZ.clear(), reach.clear(), start.clear();
-  }
-  Eigen::Vector3i cellCoord(const Vec3& p) const {
-    Eigen::Vector3i c;
-    for (int k = 0; k < 3; ++k) c[k] = std::clamp(int(std::floor((p[k] - origin[k]) * inv)), 0, dims[k] - 1);
-    return c;
-  }
-  uint32_t cellIndex(int x, int y, int z) const { return uint32_t((size_t(z) * dims.y() + y) * dims.x() + x); }
-  // Calls f(j) for the plant particles in the 27 cells around p (candidates; test the kernel).
-  template <class F>
-  void forCandidates(const Vec3& p, F&& f) const {
-    if (slot.empty()) return;
-    const Eigen::Vector3i c = cellCoord(p);
-    const Eigen::Vector3i lo = (c.array() - 1).max(0).matrix();
-    const Eigen::Vector3i hi = (c.array() + 1).min(dims.array() - 1).matrix();
-    for (int z = lo.z(); z <= hi.z(); ++z)
-      for (int y = lo.y(); y <= hi.y(); ++y)
-        for (uint32_t j = start[cellIndex(lo.x(), y, z)], e = start[cellIndex(hi.x(), y, z) + 1]; j < e; ++j) f(j);
+    volume.clear(), dragK.clear(), invZ.clear(), extent.clear(), start.clear(), entries.clear();
+    packX.clear(), packAxis.clear(), packV.clear(), packG.clear();
   }
   // η² = |G(x − x_j)|² for the ellipsoid of j (eq. 13), with u = x − x_j.
   float eta2(uint32_t j, const Vec3& u, float* along) const {
@@ -296,19 +365,31 @@ SphAir::SphAir(const SphSettings& settings) : settings_(settings) {
       w.edgeGradient[size_t(t1) * Walls::kEdgeSamples + t2] = float(mass_ * grad);
     }
 
-  // The grid over the domain.
+  // The grid over the domain: cells of edge h/2, whose runs clipped to the sphere of radius h
+  // hold 2.5 candidates per neighbour (27 cells of edge h: 6.4), or of edge h in huge domains.
   Grid& g = *grid_;
   g.origin = settings_.domainMin;
-  g.inv = 1.0f / h_;
-  size_t cells = 1;
-  for (int k = 0; k < 3; ++k) {
-    g.dims[k] = std::max(1, int(std::ceil((settings_.domainMax[k] - settings_.domainMin[k]) / h_)));
-    cells *= size_t(g.dims[k]);
-  }
+  auto cellsOf = [&](float edge, Eigen::Vector3i* dims) {
+    size_t cells = 1;
+    for (int k = 0; k < 3; ++k) {
+      (*dims)[k] = std::max(1, int(std::ceil((settings_.domainMax[k] - settings_.domainMin[k]) / edge)));
+      cells *= size_t((*dims)[k]);
+    }
+    return cells;
+  };
+  size_t cells = cellsOf(h_, &g.dims);
   if (cells > kMaxCells)
     throw settingError("domain", fmt::format("the domain holds {} cells of the kernel support h = {} m (at most {}): "
                                              "shrink the domain or raise the spacing",
                                              cells, h_, kMaxCells));
+  g.edge = h_;
+  Eigen::Vector3i fine;
+  if (const size_t fineCells = cellsOf(0.5f * h_, &fine); fineCells <= kMaxCells) {
+    g.edge = 0.5f * h_;
+    g.dims = fine;
+    cells = fineCells;
+  }
+  g.inv = 1.0f / g.edge;
   g.start.assign(cells + 1, 0);
 }
 
@@ -502,7 +583,9 @@ void SphAir::buildGrid() {
     for (size_t i = 0; i < n; ++i)
       if (g.cellOf[i] != kDead) g.order[next[g.cellOf[i]]++] = uint32_t(i);
   }
-  for (auto* a : {&g.px, &g.py, &g.pz, &g.vx, &g.vy, &g.vz, &g.rho, &g.pressure, &g.sdf, &g.dragRate}) a->resize(live);
+  for (auto* a : {&g.vx, &g.vy, &g.vz, &g.rho, &g.pressure, &g.sdf, &g.dragRate}) a->resize(live);
+  // Positions padded by four for the density pass's 4-wide loads (the padding is masked off).
+  for (auto* a : {&g.px, &g.py, &g.pz}) a->assign(live + 4, 0.0f);
   g.sdfNormal.resize(live), g.acc.resize(live), g.dragAcc.resize(live);
   const float c2 = settings_.soundSpeed * settings_.soundSpeed, rho0 = settings_.restDensity;
   const float background = backgroundPressure();
@@ -530,16 +613,13 @@ void SphAir::querySdf(const env::Environment& env, size_t i) {
   }
 }
 
-// The plants' grown branch particles that can reach the domain, binned on their own grid.
+// The plants' grown branch particles that can reach the domain, in the order of the air
+// grid's cells, and each listed in the cells its support's bounding box meets.
 void SphAir::collectPlants(const particles::ParticleWorld& world) {
   Plants& P = *plants_;
+  const Grid& g = *grid_;
   P.clear();
-  struct Candidate {
-    uint32_t slot;
-    float reach;
-  };
-  std::vector<Candidate> found;
-  float maxReach = h_;
+  std::vector<uint32_t> found;
   const Vec3 lo = settings_.domainMin, hi = settings_.domainMax;
   for (uint32_t i = 0; i < world.capacity(); ++i) {
     const uint32_t f = world.flags(i);
@@ -547,31 +627,23 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
     const float reach = world.halfLength(i) + h_;
     const Vec3& x = world.position(i);
     if (!isFinite(x) || ((x.array() < (lo.array() - reach)).any() || (x.array() > (hi.array() + reach)).any())) continue;
-    found.push_back({i, reach});
-    maxReach = std::max(maxReach, reach);
+    found.push_back(i);
   }
-  P.origin = lo - Vec3::Constant(maxReach);
-  P.inv = 1.0f / maxReach;
-  size_t cells = 1;
-  for (int k = 0; k < 3; ++k) {
-    P.dims[k] = std::max(1, int(std::ceil((hi[k] - lo[k] + 2.0f * maxReach) * P.inv)));
-    cells *= size_t(P.dims[k]);
-  }
-  P.start.assign(cells + 1, 0);
-  std::vector<uint32_t> cellOf(found.size());
-  for (size_t k = 0; k < found.size(); ++k) {
-    const Eigen::Vector3i c = P.cellCoord(world.position(found[k].slot));
-    cellOf[k] = P.cellIndex(c.x(), c.y(), c.z());
-    ++P.start[cellOf[k] + 1];
-  }
-  for (size_t c = 1; c < P.start.size(); ++c) P.start[c] += P.start[c - 1];
-  const size_t n = found.size();
-  P.slot.resize(n), P.x.resize(n), P.axis.resize(n), P.v.resize(n), P.invA2.resize(n), P.invB2.resize(n);
-  P.detG.resize(n), P.volume.resize(n), P.dragK.assign(n, 0.0f), P.invZ.assign(n, 0.0f), P.reach.resize(n);
-  std::vector<uint32_t> next(P.start.begin(), P.start.end() - 1);
+  // Counting sort by the cell of the centre, stable in particle id.
+  const size_t n = found.size(), cells = g.start.size() - 1;
+  std::vector<uint32_t> cellOf(n), first(cells + 1, 0);
   for (size_t k = 0; k < n; ++k) {
-    const uint32_t j = next[cellOf[k]]++;
-    const uint32_t i = found[k].slot;
+    const Eigen::Vector3i c = g.cellCoord(world.position(found[k]));
+    cellOf[k] = g.cellIndex(c.x(), c.y(), c.z());
+    ++first[cellOf[k] + 1];
+  }
+  for (size_t c = 1; c < first.size(); ++c) first[c] += first[c - 1];
+  P.slot.resize(n), P.x.resize(n), P.axis.resize(n), P.v.resize(n), P.invA2.resize(n), P.invB2.resize(n);
+  P.detG.resize(n), P.volume.resize(n), P.dragK.assign(n, 0.0f), P.invZ.assign(n, 0.0f), P.extent.resize(n);
+  P.packX.resize(n), P.packAxis.resize(n), P.packG.resize(n), P.packV.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const uint32_t j = first[cellOf[k]]++;
+    const uint32_t i = found[k];
     const float a = world.halfLength(i), b = world.radius(i);
     // eq. 13: G maps the particle's support ellipsoid — its own ellipsoid grown by the air's
     // support h along every axis — onto the unit ball: G = R diag(1/α, 1/β, 1/β) Rᵀ.
@@ -584,8 +656,29 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
     P.invB2[j] = 1.0f / (beta * beta);
     P.detG[j] = 1.0f / (alpha * beta * beta);
     P.volume[j] = 4.0f / 3.0f * kPi * a * b * b;
-    P.reach[j] = found[k].reach;
+    P.packX[j] = V4f{P.x[j].x(), P.x[j].y(), P.x[j].z(), P.invA2[j]};
+    P.packAxis[j] = V4f{P.axis[j].x(), P.axis[j].y(), P.axis[j].z(), P.invB2[j]};
+    P.packG[j] = V4f{P.detG[j], P.volume[j], 0.0f, 0.0f};
+    // The support ellipsoid's bounding box.
+    for (int c = 0; c < 3; ++c) {
+      const float e2 = P.axis[j][c] * P.axis[j][c];
+      P.extent[j][c] = std::sqrt(alpha * alpha * e2 + beta * beta * std::max(0.0f, 1.0f - e2));
+    }
   }
+  // Bin: each plant particle into every cell its box meets (boxes clamped to the grid, whose
+  // outermost cells reach to infinity).
+  P.start.assign(cells + 1, 0);
+  auto forCells = [&](uint32_t j, auto&& f) {
+    const Eigen::Vector3i c0 = g.cellCoord(P.x[j] - P.extent[j]), c1 = g.cellCoord(P.x[j] + P.extent[j]);
+    for (int z = c0.z(); z <= c1.z(); ++z)
+      for (int y = c0.y(); y <= c1.y(); ++y)
+        for (int x = c0.x(), c = int(g.cellIndex(x, y, z)); x <= c1.x(); ++x, ++c) f(c);
+  };
+  for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { ++P.start[size_t(c) + 1]; });
+  for (size_t c = 1; c < P.start.size(); ++c) P.start[c] += P.start[c - 1];
+  P.entries.resize(P.start.back());
+  std::vector<uint32_t> next(P.start.begin(), P.start.end() - 1);
+  for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { P.entries[next[size_t(c)]++] = j; });
 }
 
 // Once per frame, per plant particle: the air velocity around it (eq. 12 with its kernel), its
@@ -600,10 +693,7 @@ void SphAir::plantSide(particles::ParticleWorld& world) {
   parallelFor(0, P.size(), [&](size_t jj) {
     const uint32_t j = uint32_t(jj);
     const Vec3 xj = P.x[j];
-    // The support ellipsoid's bounding box.
-    const float a2 = 1.0f / P.invA2[j], b2 = 1.0f / P.invB2[j];
-    Vec3 ext;
-    for (int k = 0; k < 3; ++k) ext[k] = std::sqrt(a2 * P.axis[j][k] * P.axis[j][k] + b2 * (1.0f - P.axis[j][k] * P.axis[j][k]));
+    const Vec3 ext = P.extent[j];
     float z = 0.0f;
     Vec3 sum = Vec3::Zero(), pressureForce = Vec3::Zero();
     g.forRuns(g.cellCoord(xj - ext), g.cellCoord(xj + ext), [&](uint32_t b, uint32_t e) {
@@ -627,6 +717,7 @@ void SphAir::plantSide(particles::ParticleWorld& world) {
     rel -= rel.dot(P.axis[j]) * P.axis[j];
     const float area = 4.0f * world.halfLength(i) * world.radius(i);
     P.dragK[j] = 0.5f * rho0 * std::min(z, 1.0f) * cd * area * rel.norm();
+    P.packV[j] = V4f{P.v[j].x(), P.v[j].y(), P.v[j].z(), P.dragK[j] * P.invZ[j]};
     const float mj = world.mass(i);
     // Implicit in the drag, so a light particle never overshoots the air's velocity.
     external[i] = P.dragK[j] * rel / (mj + P.dragK[j] * dt) + pressureForce / mj;
@@ -637,76 +728,151 @@ void SphAir::substep(const env::Environment& env, float dt) {
   Grid& g = *grid_;
   const Plants& P = *plants_;
   const Walls& W = *walls_;
-  const size_t n = g.size();
+  const size_t n = g.size(), blocks = (n + kBlock - 1) / kBlock;
   const float h = h_, h2 = h * h, invH2 = 1.0f / h2, m = mass_;
   const float rho0 = settings_.restDensity, c2 = settings_.soundSpeed * settings_.soundSpeed, mu = settings_.viscosity;
   const float background = backgroundPressure();
   const float norm6 = kPoly6 / (h * h * h), normSpiky = kSpiky / (h * h * h * h), normVisc = kVisc / (h * h * h * h * h);
   const bool closed = settings_.boundary == SphBoundary::Closed;
   const Vec3 dmin = settings_.domainMin, dmax = settings_.domainMax;
+  // The search radius: h and a hair, so that round-off in the run clipping loses no pair.
+  const float search = h * (1.0f + 1e-5f);
+  g.nbrBlocks.resize(blocks), g.hitBlocks.resize(blocks);
+  g.nbrBegin.resize(n), g.nbrCount.resize(n), g.hitBegin.resize(n), g.hitCount.resize(n);
+  g.invRho.resize(n), g.pOverRho.resize(n), g.packedX.resize(n), g.packedV.resize(n);
+  // Room for `more` entries after `used` in a block's buffer.
+  auto room = [](std::vector<uint32_t>& buffer, size_t used, size_t more) {
+    if (buffer.size() < used + more) buffer.resize(std::max(used + more, 2 * buffer.size()));
+    return buffer.data();
+  };
 
-  // Density (eq. 12 with A = ρ: ρ_i = Σ m W_poly6) plus the walls' mirrored lattices.
+  // Density (eq. 12 with A = ρ: ρ_i = Σ m W_poly6) plus the walls' mirrored lattices; the same
+  // pass lists the neighbours 0 < r < h for the forces.
   {
     ScopedTimer t(&timings_.density);
-    parallelFor(0, n, [&](size_t k) {
-      const float x = g.px[k], y = g.py[k], z = g.pz[k];
-      float sum = 0.0f;
-      g.forNeighbourRuns(Vec3(x, y, z), [&](uint32_t b, uint32_t e) {
-        for (uint32_t j = b; j < e; ++j) {
-          const float dx = g.px[j] - x, dy = g.py[j] - y, dz = g.pz[j] - z;
-          const float q = (dx * dx + dy * dy + dz * dz) * invH2;
-          const float t = std::max(0.0f, 1.0f - q);
-          sum += t * t * t;
-        }
-      });
-      float rho = m * norm6 * sum;
-      rho += W.lookup(W.density, g.sdf[k]);
-      if (closed) rho += boxGhostDensity(W, Vec3(x, y, z) - dmin, dmax - Vec3(x, y, z));  // walls
-      g.rho[k] = rho;
-    }, kGrain);
-  }
-
-  // Plants add to the density like boundary particles of volume Ψ (eq. 12–13); then the
-  // equation of state.
-  {
-    ScopedTimer t(&timings_.coupling);
-    parallelFor(0, n, [&](size_t k) {
-      float rho = g.rho[k];
-      if (P.size() > 0) {
-        const Vec3 x(g.px[k], g.py[k], g.pz[k]);
-        P.forCandidates(x, [&](uint32_t j) {
-          float along;
-          const float e2 = P.eta2(j, x - P.x[j], &along);
-          if (e2 < 1.0f) rho += rho0 * P.volume[j] * P.poly6(j, e2);
+    parallelFor(0, blocks, [&](size_t block) {
+      std::vector<uint32_t>& buffer = g.nbrBlocks[block];
+      size_t used = 0;
+      for (size_t k = block * kBlock, end = std::min(n, k + kBlock); k < end; ++k) {
+        const float x = g.px[k], y = g.py[k], z = g.pz[k];
+        g.nbrBegin[k] = uint32_t(used);
+        // Four candidates at a time (the arrays are padded), lanes past the run masked off;
+        // four partial sums, added in a fixed order.
+        const V4f x4 = splat(x), y4 = splat(y), z4 = splat(z);
+        V4f sum4 = splat(0.0f);
+        g.forSphereRuns(x, y, z, search, [&](uint32_t b, uint32_t e) {
+          uint32_t* out = room(buffer, used, e - b + 4);
+          for (uint32_t j = b; j < e; j += 4) {
+            const V4f dx = load4(&g.px[j]) - x4, dy = load4(&g.py[j]) - y4, dz = load4(&g.pz[j]) - z4;
+            const V4f r2 = dx * dx + dy * dy + dz * dz;
+            const V4i inRun = kLanes < int32_t(e - j);
+            const V4f t = select(inRun & (r2 < h2), 1.0f - r2 * invH2);
+            sum4 += t * t * t;
+            const V4i listed = inRun & (r2 < h2) & (r2 > 0.0f);
+            out[used] = j, used -= size_t(int64_t(listed[0]));
+            out[used] = j + 1, used -= size_t(int64_t(listed[1]));
+            out[used] = j + 2, used -= size_t(int64_t(listed[2]));
+            out[used] = j + 3, used -= size_t(int64_t(listed[3]));
+          }
         });
+        g.nbrCount[k] = uint32_t(used - g.nbrBegin[k]);
+        const float sum = (sum4[0] + sum4[1]) + (sum4[2] + sum4[3]);
+        float rho = m * norm6 * sum;
+        rho += W.lookup(W.density, g.sdf[k]);
+        if (closed) rho += boxGhostDensity(W, Vec3(x, y, z) - dmin, dmax - Vec3(x, y, z));  // walls
         g.rho[k] = rho;
       }
-      g.pressure[k] = std::max(0.0f, c2 * (rho - rho0) + background);
-    }, kGrain);
+    }, 1);
   }
 
-  // Pressure and viscosity (eq. 11, MCG03 eq. 10 and 14), walls' pressure.
+  // Plants add to the density like boundary particles of volume Ψ (eq. 12–13), and the plant
+  // particles whose support holds the air particle are listed; then the equation of state.
+  {
+    ScopedTimer t(&timings_.coupling);
+    const bool hasPlants = P.size() > 0;
+    parallelFor(0, blocks, [&](size_t block) {
+      std::vector<uint32_t>& buffer = g.hitBlocks[block];
+      size_t used = 0;
+      for (size_t k = block * kBlock, end = std::min(n, k + kBlock); k < end; ++k) {
+        float rho = g.rho[k];
+        g.hitBegin[k] = uint32_t(used);
+        if (hasPlants) {
+          const Vec3 x(g.px[k], g.py[k], g.pz[k]);
+          const Eigen::Vector3i c = g.cellCoord(x);
+          const uint32_t cell = g.cellIndex(c.x(), c.y(), c.z()), b = P.start[cell], e = P.start[cell + 1];
+          uint32_t* out = room(buffer, used, e - b + 4);
+          // Four candidates at a time (their packed state transposed into lanes; lanes past the
+          // list repeat its last entry and are masked off), four partial sums.
+          const V4f x4 = splat(x.x()), y4 = splat(x.y()), z4 = splat(x.z());
+          V4f sum4 = splat(0.0f);
+          for (uint32_t q = b; q < e; q += 4) {
+            uint32_t j[4];
+            for (int l = 0; l < 4; ++l) j[l] = P.entries[std::min(q + uint32_t(l), e - 1)];
+            V4f jx, jy, jz, invA2, ex, ey, ez, invB2, detG, volume, unused0, unused1;
+            transpose(P.packX[j[0]], P.packX[j[1]], P.packX[j[2]], P.packX[j[3]], &jx, &jy, &jz, &invA2);
+            transpose(P.packAxis[j[0]], P.packAxis[j[1]], P.packAxis[j[2]], P.packAxis[j[3]], &ex, &ey, &ez, &invB2);
+            transpose(P.packG[j[0]], P.packG[j[1]], P.packG[j[2]], P.packG[j[3]], &detG, &volume, &unused0, &unused1);
+            const V4f ux = x4 - jx, uy = y4 - jy, uz = z4 - jz;
+            const V4f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
+            const V4f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
+            const V4i hit = (kLanes < int32_t(e - q)) & (e2 < 1.0f);
+            const V4f t = 1.0f - e2;
+            sum4 += masked(hit, (rho0 * kPoly6) * volume * detG * t * t * t);
+            out[used] = j[0], used -= size_t(int64_t(hit[0]));
+            out[used] = j[1], used -= size_t(int64_t(hit[1]));
+            out[used] = j[2], used -= size_t(int64_t(hit[2]));
+            out[used] = j[3], used -= size_t(int64_t(hit[3]));
+          }
+          rho += (sum4[0] + sum4[1]) + (sum4[2] + sum4[3]);
+          g.rho[k] = rho;
+        }
+        g.hitCount[k] = uint32_t(used - g.hitBegin[k]);
+        const float p = std::max(0.0f, c2 * (rho - rho0) + background);
+        g.pressure[k] = p;
+        g.invRho[k] = 1.0f / rho;
+        g.pOverRho[k] = p / rho;
+        g.packedX[k] = V4f{g.px[k], g.py[k], g.pz[k], g.invRho[k]};
+        g.packedV[k] = V4f{g.vx[k], g.vy[k], g.vz[k], g.pOverRho[k]};
+      }
+    }, 1);
+  }
+
+  // Pressure and viscosity (eq. 11, MCG03 eq. 10 and 14) over the listed neighbours, walls'
+  // pressure.
   {
     ScopedTimer t(&timings_.forces);
+    // −m (p_i + p_j)/(2ρ_j) ∇W_spiky, ∇W_spiky = −45/(π h⁶)(h − r)² r̂, and
+    // μ m (v_j − v_i)/ρ_j ∇²W_visc, ∇²W_visc = 45/(π h⁶)(h − r), with their constants folded.
+    const float kp = 0.5f * m * normSpiky / (h * h), kv = mu * m * normVisc / h;
+    const V4f* packedX = g.packedX.data();
+    const V4f* packedV = g.packedV.data();
     parallelFor(0, n, [&](size_t k) {
-      const float x = g.px[k], y = g.py[k], z = g.pz[k];
-      const float vx = g.vx[k], vy = g.vy[k], vz = g.vz[k], pk = g.pressure[k];
-      float ax = 0, ay = 0, az = 0;
-      g.forNeighbourRuns(Vec3(x, y, z), [&](uint32_t b, uint32_t e) {
-        for (uint32_t j = b; j < e; ++j) {
-          const float dx = x - g.px[j], dy = y - g.py[j], dz = z - g.pz[j];
-          const float r2 = dx * dx + dy * dy + dz * dz;
-          if (!(r2 < h2) || !(r2 > 0.0f)) continue;
-          const float r = std::sqrt(r2), t = h - r, invRho = 1.0f / g.rho[j];
-          // −m (p_i + p_j)/(2ρ_j) ∇W_spiky, ∇W_spiky = −45/(π h⁶)(h − r)² r̂.
-          const float fp = m * (pk + g.pressure[j]) * 0.5f * invRho * normSpiky / (h * h) * t * t / r;
-          // μ m (v_j − v_i)/ρ_j ∇²W_visc, ∇²W_visc = 45/(π h⁶)(h − r).
-          const float fv = mu * m * invRho * normVisc / h * t;
-          ax += fp * dx + fv * (g.vx[j] - vx);
-          ay += fp * dy + fv * (g.vy[j] - vy);
-          az += fp * dz + fv * (g.vz[j] - vz);
-        }
-      });
+      const V4f xk = packedX[k], vk = packedV[k];
+      const float x = xk[0], y = xk[1], z = xk[2], pk = g.pressure[k];
+      const V4f x4 = splat(x), y4 = splat(y), z4 = splat(z), vx4 = splat(vk[0]), vy4 = splat(vk[1]), vz4 = splat(vk[2]);
+      const uint32_t* list = g.nbrBlocks[k / kBlock].data() + g.nbrBegin[k];
+      const uint32_t count = g.nbrCount[k];
+      V4f ax4 = splat(0.0f), ay4 = ax4, az4 = ax4;
+      // Four neighbours at a time, each one's packed state transposed into lanes; lanes past
+      // the list repeat its last entry and are masked off.
+      for (uint32_t c = 0; c < count; c += 4) {
+        uint32_t j[4];
+        for (int l = 0; l < 4; ++l) j[l] = list[std::min(c + uint32_t(l), count - 1)];
+        V4f px4, py4, pz4, invRho4, pvx4, pvy4, pvz4, pOverRho4;
+        transpose(packedX[j[0]], packedX[j[1]], packedX[j[2]], packedX[j[3]], &px4, &py4, &pz4, &invRho4);
+        transpose(packedV[j[0]], packedV[j[1]], packedV[j[2]], packedV[j[3]], &pvx4, &pvy4, &pvz4, &pOverRho4);
+        const V4f dx = x4 - px4, dy = y4 - py4, dz = z4 - pz4;
+        const V4f r = sqrt4(dx * dx + dy * dy + dz * dz), t = h - r;
+        const V4i live = kLanes < int32_t(count - c);
+        const V4f fp = masked(live, kp * (pk * invRho4 + pOverRho4) * t * t / r);
+        const V4f fv = masked(live, kv * invRho4 * t);
+        ax4 += fp * dx + fv * (pvx4 - vx4);
+        ay4 += fp * dy + fv * (pvy4 - vy4);
+        az4 += fp * dz + fv * (pvz4 - vz4);
+      }
+      const float ax = (ax4[0] + ax4[1]) + (ax4[2] + ax4[3]);
+      const float ay = (ay4[0] + ay4[1]) + (ay4[2] + ay4[3]);
+      const float az = (az4[0] + az4[1]) + (az4[2] + az4[3]);
       const float rho = g.rho[k];
       Vec3 a = Vec3(ax, ay, az) / rho;
       // Walls: a = −p/(ρ0 ρ) g_w(d) n.
@@ -724,23 +890,44 @@ void SphAir::substep(const env::Environment& env, float dt) {
       parallelFor(0, n, [&](size_t k) {
         const Vec3 x(g.px[k], g.py[k], g.pz[k]), v(g.vx[k], g.vy[k], g.vz[k]);
         const float rho = g.rho[k], pk = g.pressure[k], volume = m / rho;
-        Vec3 a = Vec3::Zero(), drag = Vec3::Zero();
-        float rate = 0.0f;
-        P.forCandidates(x, [&](uint32_t j) {
-          const Vec3 u = x - P.x[j];
-          float along;
-          const float e2 = P.eta2(j, u, &along);
-          if (!(e2 < 1.0f)) return;
-          // Mirrored pressure on a boundary particle of volume Ψ: −(p/ρ) Ψ ∇W.
-          if (pk > 0.0f) a -= (pk / rho * P.volume[j]) * P.spikyGradient(j, u, along, e2);
+        const uint32_t* list = g.hitBlocks[k / kBlock].data() + g.hitBegin[k];
+        const uint32_t count = g.hitCount[k];
+        const V4f x4 = splat(x.x()), y4 = splat(x.y()), z4 = splat(x.z());
+        const V4f vx4 = splat(v.x()), vy4 = splat(v.y()), vz4 = splat(v.z());
+        // Mirrored pressure on a boundary particle of volume Ψ: −(p/ρ) Ψ ∇W, with
+        // ∇W = det G (−45/π)(1 − |η|)² G²u/|η|, G²u = (u·e) e/α² + (u − (u·e) e)/β².
+        const float push = pk > 0.0f ? pk / rho * kSpiky : 0.0f;
+        V4f ax = splat(0.0f), ay = ax, az = ax, dx = ax, dy = ax, dz = ax, rate4 = ax;
+        for (uint32_t c = 0; c < count; c += 4) {
+          uint32_t j[4];
+          for (int l = 0; l < 4; ++l) j[l] = list[std::min(c + uint32_t(l), count - 1)];
+          V4f jx, jy, jz, invA2, ex, ey, ez, invB2, jvx, jvy, jvz, dragShare, detG, psi, unused0, unused1;
+          transpose(P.packX[j[0]], P.packX[j[1]], P.packX[j[2]], P.packX[j[3]], &jx, &jy, &jz, &invA2);
+          transpose(P.packAxis[j[0]], P.packAxis[j[1]], P.packAxis[j[2]], P.packAxis[j[3]], &ex, &ey, &ez, &invB2);
+          transpose(P.packV[j[0]], P.packV[j[1]], P.packV[j[2]], P.packV[j[3]], &jvx, &jvy, &jvz, &dragShare);
+          transpose(P.packG[j[0]], P.packG[j[1]], P.packG[j[2]], P.packG[j[3]], &detG, &psi, &unused0, &unused1);
+          const V4i live = kLanes < int32_t(count - c);
+          const V4f ux = x4 - jx, uy = y4 - jy, uz = z4 - jz;
+          const V4f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
+          const V4f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
+          const V4f eta = sqrt4(e2), t = 1.0f - eta;
+          const V4f coef = masked(live & (eta > 1e-6f), push * psi * detG * t * t / eta);
+          const V4f ga = along * invA2 - along * invB2;  // G²u = ga e + u/β²
+          ax += coef * (ga * ex + invB2 * ux);
+          ay += coef * (ga * ey + invB2 * uy);
+          az += coef * (ga * ez + invB2 * uz);
           // The air's share φ = V W / max(Z, ½) of the plant particle's drag k (v_j − v)⊥.
-          const float phi = volume * P.poly6(j, e2) * P.invZ[j];
-          const float kk = phi * P.dragK[j];
-          Vec3 rel = P.v[j] - v;
-          rel -= rel.dot(P.axis[j]) * P.axis[j];
-          drag += kk * rel;
-          rate += kk;
-        });
+          const V4f w = 1.0f - e2;
+          const V4f kk = masked(live, (volume * kPoly6) * detG * w * w * w * dragShare);
+          V4f rx = jvx - vx4, ry = jvy - vy4, rz = jvz - vz4;
+          const V4f ra = rx * ex + ry * ey + rz * ez;
+          rx -= ra * ex, ry -= ra * ey, rz -= ra * ez;
+          dx += kk * rx, dy += kk * ry, dz += kk * rz;
+          rate4 += kk;
+        }
+        auto total = [](V4f v) { return (v[0] + v[1]) + (v[2] + v[3]); };
+        const Vec3 a(total(ax), total(ay), total(az)), drag(total(dx), total(dy), total(dz));
+        const float rate = total(rate4);
         g.acc[k] += a;
         g.dragAcc[k] = drag / m;
         g.dragRate[k] = rate / m;
@@ -873,7 +1060,7 @@ Vec3 SphAir::velocityAt(const Vec3& p, bool* covered) const {
   const float invH2 = 1.0f / (h_ * h_), norm6 = kPoly6 / (h_ * h_ * h_);
   float z = 0.0f;
   Vec3 sum = Vec3::Zero();
-  g.forNeighbourRuns(p, [&](uint32_t b, uint32_t e) {
+  g.forSphereRuns(p.x(), p.y(), p.z(), h_ * (1.0f + 1e-5f), [&](uint32_t b, uint32_t e) {
     for (uint32_t k = b; k < e; ++k) {
       const float dx = g.px[k] - p.x(), dy = g.py[k] - p.y(), dz = g.pz[k] - p.z();
       const float t = 1.0f - (dx * dx + dy * dy + dz * dz) * invH2;
