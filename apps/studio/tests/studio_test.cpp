@@ -35,6 +35,14 @@ std::string readText(const fs::path& path) {
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
+// 'path', for a shell command line.
+std::string quoted(const fs::path& path) {
+  std::string s(1, '\'');
+  s += path.string();
+  s += '\'';
+  return s;
+}
+
 bool haveXvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
 
 // Runs the studio with `args` (under xvfb-run when `display`); returns the exit code and
@@ -99,8 +107,7 @@ TEST(StudioCommandLine, MissingFilesAreErrorsNamingThem) {
   fs::path dir = scratchDir();
   std::string out, err;
   fs::path shot = dir / "x.png";
-  EXPECT_EQ(runStudio(dir, "'" + (dir / "missing.json").string() + "' --frames 1 --screenshot '" + shot.string() + "'",
-                      true, &out, &err),
+  EXPECT_EQ(runStudio(dir, quoted(dir / "missing.json") + " --frames 1 --screenshot " + quoted(shot), true, &out, &err),
             1);
   EXPECT_NE(err.find("missing.json"), std::string::npos) << err;
   EXPECT_FALSE(fs::exists(shot));
@@ -109,16 +116,16 @@ TEST(StudioCommandLine, MissingFilesAreErrorsNamingThem) {
 TEST(StudioHeadless, ReplaysSeedPaintDragCutAndShowsTheOutcome) {
   if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
   fs::path dir = scratchDir();
-  const std::string scene = (kTestDir / "wall.json").string();
+  const fs::path scene = kTestDir / "wall.json";
   // 75 frames × 4 steps: the cut at step 120 leaves time for the pieces to fall, rest (1 s)
   // and be removed (3 s later) at dt = 25 ms.
   const int frames = 75, speed = 4;
   auto run = [&](const std::string& script, const fs::path& png, std::string* err) {
     std::string out;
     int code = runStudio(dir,
-                         "'" + scene + "' --script '" + (kTestDir / script).string() + "' --frames " +
-                             std::to_string(frames) + " --speed " + std::to_string(speed) + " --screenshot '" +
-                             png.string() + "' --size 1200x700 --stats",
+                         quoted(scene) + " --script " + quoted(kTestDir / script) + " --frames " +
+                             std::to_string(frames) + " --speed " + std::to_string(speed) + " --screenshot " +
+                             quoted(png) + " --size 1200x700 --stats",
                          true, &out, err);
     EXPECT_NE(out.find("frame 0:"), std::string::npos) << out;
     return code;
@@ -143,6 +150,29 @@ TEST(StudioHeadless, ReplaysSeedPaintDragCutAndShowsTheOutcome) {
     session::runEditScript(editor, session::loadEditScript(kTestDir / script), frames * speed);
     EXPECT_EQ(reportedSegments(err), long(session->segmentCount())) << script << ": " << err;
   }
+}
+
+TEST(StudioHeadless, SavedSessionReopensWhereItStopped) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  const fs::path saved = dir / "sculpt.tses";
+  std::string out, err;
+  ASSERT_EQ(runStudio(dir,
+                      quoted(kTestDir / "wall.json") + " --script " + quoted(kTestDir / "sculpt-nocut.json") +
+                          " --frames 30 --speed 4 --size 800x600 --screenshot " + quoted(dir / "a.png") +
+                          " --save-session " + quoted(saved),
+                      true, &out, &err),
+            0)
+      << err;
+  const long before = reportedSegments(err);
+  ASSERT_GT(before, 0) << err;
+  ASSERT_TRUE(fs::exists(saved));
+  ASSERT_EQ(runStudio(dir, quoted(saved) + " --frames 0 --size 800x600 --screenshot " + quoted(dir / "b.png"), true,
+                      &out, &err),
+            0)
+      << err;
+  EXPECT_EQ(reportedSegments(err), before) << err;
+  EXPECT_NE(err.find("step 120,"), std::string::npos) << err;
 }
 
 }  // namespace
