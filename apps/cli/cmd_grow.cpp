@@ -1,6 +1,7 @@
 // tendril grow SCENE -o DIR: grows every plant of a scene and writes plant.glb / plant.obj (and
 // plant-wind.glb, a looping wind animation, when asked).
 #include "commands.h"
+#include "plant_output.h"
 
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
@@ -33,31 +34,6 @@ struct GrowOptions {
   CommonOptions common;
 };
 
-std::set<std::string> parseFormats(const std::string& list) {
-  std::set<std::string> out;
-  size_t start = 0;
-  while (start <= list.size()) {
-    size_t comma = list.find(',', start);
-    std::string f = list.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    if (f != "glb" && f != "obj")
-      throw Error("command line", "--format", fmt::format("unknown format \"{}\" (expected glb, obj or glb,obj)", f));
-    out.insert(f);
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return out;
-}
-
-std::filesystem::path prepareOutputDir(const std::string& dir) {
-  std::filesystem::path p(dir);
-  std::error_code ec;
-  if (std::filesystem::exists(p, ec) && !std::filesystem::is_directory(p, ec))
-    throw Error("command line", "-o", fmt::format("{} exists and is not a directory", dir));
-  std::filesystem::create_directories(p, ec);
-  if (ec) throw Error("command line", "-o", fmt::format("cannot create directory {}: {}", dir, ec.message()));
-  return p;
-}
-
 int runGrow(const GrowOptions& o) {
   applyCommonOptions(o.common);
   std::set<std::string> formats = parseFormats(o.formats);
@@ -77,27 +53,8 @@ int runGrow(const GrowOptions& o) {
   std::vector<std::string> written;
   io::ExportScene exportScene;
   auto writeFiles = [&](const std::string& stem) {
-    exportScene = io::ExportScene{};
-    exportScene.plants = session.plants();
-    for (const plant::PlantModel& p : exportScene.plants) plant::validate(p, o.scene);
-    if (sc.output.includeObstacles) {
-      const env::Environment& env = session.environment();
-      for (uint32_t id = 0; id < env.obstacleCount(); ++id) {
-        const env::ObstacleInfo& info = env.obstacle(id);
-        io::NamedMesh m{info.name, env.obstacleMesh(id), info.color};
-        for (Vec3& v : m.mesh.positions) v = info.worldFromLocal.applyPoint(v);
-        exportScene.meshes.push_back(std::move(m));
-      }
-    }
-    io::ExportModel model = io::buildExportModel(exportScene, options);
-    if (formats.count("glb")) {
-      io::writeGlb(model, outDir / (stem + ".glb"));
-      written.push_back((outDir / (stem + ".glb")).string());
-    }
-    if (formats.count("obj")) {
-      io::writeObj(model, outDir / (stem + ".obj"));
-      written.push_back((outDir / (stem + ".obj")).string());
-    }
+    for (std::string& f : writePlantFiles(session, outDir, stem, formats, o.scene, exportScene))
+      written.push_back(std::move(f));
   };
 
   double exportSeconds = 0.0;

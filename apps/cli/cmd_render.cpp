@@ -1,5 +1,5 @@
-// tendril render SCENE -o image.png: grows every plant of a scene and renders the result
-// headless (EGL, no window or X server needed) to a PNG.
+// tendril render SCENE|SESSION -o image.png: grows every plant of a scene (or takes a saved
+// session as it is) and renders the result headless (EGL, no window or X server needed) to a PNG.
 #include "commands.h"
 
 #include "tendril/core/error.h"
@@ -12,6 +12,7 @@
 #include "tendril/render/session_render.h"
 #include "tendril/scene/scene.h"
 #include "tendril/session/session.h"
+#include "tendril/session/session_file.h"
 
 #include <fmt/format.h>
 
@@ -54,16 +55,25 @@ int runRender(const RenderOptions& o) {
   if (eye && target && (*eye - *target).norm() < 1e-6f)
     throw Error("command line", "--eye", "the eye and the target are the same point");
 
-  scene::Scene scene = scene::loadScene(o.scene);
-  if (o.steps >= 0) scene.steps = static_cast<int>(o.steps);
-  if (o.seed >= 0) scene.seed = static_cast<uint64_t>(o.seed);
-
+  // A session file (.tses) is rendered as saved (--steps grows it further); a scene is grown first.
   Timer total;
-  session::Session session(std::move(scene));
-  const scene::Scene& sc = session.scene();
+  std::unique_ptr<session::Session> owned;
+  uint32_t steps = 0;
+  if (std::filesystem::exists(o.scene) && session::isSessionFile(o.scene)) {
+    if (o.seed >= 0) throw Error("command line", "--seed", "a session file keeps its own seed");
+    owned = session::loadSession(o.scene).session;
+    steps = o.steps >= 0 ? uint32_t(o.steps) : 0;
+  } else {
+    scene::Scene scene = scene::loadScene(o.scene);
+    if (o.steps >= 0) scene.steps = static_cast<int>(o.steps);
+    if (o.seed >= 0) scene.seed = static_cast<uint64_t>(o.seed);
+    steps = uint32_t(scene.steps);
+    owned = std::make_unique<session::Session>(std::move(scene));
+  }
+  session::Session& session = *owned;
   {
-    Progress progress("growing", uint64_t(sc.steps), !o.common.quiet);
-    session.run(uint32_t(sc.steps), [&](uint32_t done) {
+    Progress progress("growing", uint64_t(steps), !o.common.quiet);
+    session.run(steps, [&](uint32_t done) {
       progress.update(done, fmt::format("{} segments", session.segmentCount()));
     });
     progress.finish(fmt::format("{} segments", session.segmentCount()));
@@ -106,11 +116,11 @@ int runRender(const RenderOptions& o) {
 RegisterCommand registerRender("render", "Grow every plant of a scene and render it to a PNG (headless OpenGL)", 20,
                                [](CLI::App& sub) -> std::function<int()> {
   auto o = std::make_shared<RenderOptions>();
-  sub.add_option("scene", o->scene, "Scene file (JSON, see docs/scene-format.md)")->required();
+  sub.add_option("scene", o->scene, "Scene file (JSON, see docs/scene-format.md) or session file (.tses)")->required();
   sub.add_option("-o,--output", o->output, "PNG file to write (replaced atomically)")->required();
   sub.add_option("--width", o->width, "Image width in pixels")->check(CLI::Range(16, 16384))->capture_default_str();
   sub.add_option("--height", o->height, "Image height in pixels")->check(CLI::Range(16, 16384))->capture_default_str();
-  sub.add_option("--steps", o->steps, "Growth steps (overrides the scene's \"steps\")")->check(CLI::Range(0, 10000000));
+  sub.add_option("--steps", o->steps, "Growth steps (overrides the scene's \"steps\"; for a session file: steps to grow on, default 0)")->check(CLI::Range(0, 10000000));
   sub.add_option("--seed", o->seed, "Scene seed (overrides the scene's \"seed\")")->check(CLI::NonNegativeNumber);
   sub.add_option("--eye", o->eye, "Camera position x,y,z (m); default: a 3/4 front view framing the scene");
   sub.add_option("--target", o->target, "Point the camera looks at, x,y,z (m); default: the scene's centre");

@@ -49,6 +49,9 @@ class ClimbPlantSystem final : public models::PlantSystem {
   plant::PlantModel snapshot(size_t plant) const override { return system_.snapshot(uint32_t(plant)); }
   size_t segmentCount() const override { return system_.stats().segments; }
   wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return growthFlow_[plant]; }
+  void saveState(ArchiveWriter& out) const override { system_.saveState(out); }
+  void loadState(ArchiveReader& in) override { system_.loadState(in); }
+  void cut(size_t plant, uint32_t node) override { system_.cut(uint32_t(plant), node); }
 
  private:
   ClimbSystem system_;

@@ -459,6 +459,7 @@ void ClimbSystem::mergePlant(Plant& p, size_t k) {
       o.node.parent = p.tips[i].lastNode;
       nodeIndex = p.model.addNode(o.node);
       p.birthStep.push_back(step_);
+      p.nodeEnd.push_back(o.end);
       for (int l = 0; l < o.leafCount; ++l) {
         o.leaves[l].node = nodeIndex;
         p.model.addLeaf(o.leaves[l]);

@@ -11,6 +11,7 @@
 
 #include "tendril/climb/occupancy.h"
 #include "tendril/climb/species.h"
+#include "tendril/core/archive.h"
 #include "tendril/env/environment.h"
 #include "tendril/plant/plant_model.h"
 
@@ -60,6 +61,17 @@ class ClimbSystem {
   ClimbStats stats() const;
   ClimbStats stats(uint32_t plant) const;
 
+  // Removes node `node` of the plant, everything beyond it, their leaves and their tips
+  // (interactive cuts); the parent becomes a dead end if nothing else grows from it.
+  // Throws Error for a node out of range.
+  void cut(uint32_t plant, uint32_t node);
+
+  // Every field that decides future steps (sessions, undo). loadState expects the same plants,
+  // added with the same definitions; the crowding grid is rebuilt from the segment ends (its
+  // answers do not depend on the order of insertion).
+  void saveState(ArchiveWriter& out) const;
+  void loadState(ArchiveReader& in);
+
  private:
   struct Tip {
     uint64_t id = 0;
@@ -84,6 +96,7 @@ class ClimbSystem {
     uint32_t id = 0;
     plant::PlantModel model;
     std::vector<uint32_t> birthStep;
+    std::vector<Vec3> nodeEnd;  // where each node's segment ends (its crowding-grid point)
     std::vector<Tip> tips;
     std::vector<Tip> nextTips;  // scratch for the merge
     uint64_t nextTipId = 0;
@@ -98,6 +111,7 @@ class ClimbSystem {
   void growTip(const Plant& plant, const Tip& tip, const env::Environment& env, Outcome& out) const;
   // Applies the plant's outcomes, which start at outcomes_[first]: new nodes, leaves and tips.
   void mergePlant(Plant& plant, size_t first);
+  void rebuildOccupancy();
 
   uint64_t sceneSeed_;
   float stepTime_;

@@ -2,6 +2,7 @@
 
 #include "tendril/core/error.h"
 #include "tendril/graph/build_plant.h"
+#include "tendril/plant/plant_archive.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -27,6 +28,16 @@ class GraphPlantSystem final : public models::PlantSystem {
     size_t n = 0;
     for (const plant::PlantModel& p : plants_) n += p.nodeCount();
     return n;
+  }
+  // Graph plants are generated whole and never change: their PlantModels are the state.
+  void saveState(ArchiveWriter& out) const override {
+    out.u64(plants_.size());
+    for (const plant::PlantModel& p : plants_) plant::savePlantModel(out, p);
+  }
+  void loadState(ArchiveReader& in) override {
+    const size_t at = in.position();
+    if (in.u64() != plants_.size()) in.fail(at, "the saved graph plants differ from the session's");
+    for (plant::PlantModel& p : plants_) plant::loadPlantModel(in, p);
   }
 
  private:

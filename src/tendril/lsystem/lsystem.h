@@ -13,6 +13,7 @@
 // never on the thread count.
 #pragma once
 
+#include "tendril/core/archive.h"
 #include "tendril/env/environment.h"
 #include "tendril/lsystem/compiler.h"
 #include "tendril/lsystem/derivation.h"
@@ -78,6 +79,11 @@ class LSystem {
   plant::PlantModel interpret() const;
   // The wind recorded so far (one unit per derivation step).
   const wind::GrowthFlowHistory& windHistory() const { return wind_; }
+
+  // The derivation's state (string, globals, step; sessions and undo, lsystem_state.cpp).
+  // loadState expects an LSystem made from the same grammar and options.
+  void saveState(ArchiveWriter& out) const;
+  void loadState(ArchiveReader& in);
 
  private:
   InterpretOptions interpretOptions() const;

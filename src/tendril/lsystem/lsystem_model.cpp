@@ -64,6 +64,16 @@ class LSystemPlantSystem final : public models::PlantSystem {
     return n;
   }
 
+  void saveState(ArchiveWriter& out) const override {
+    out.u64(plants_.size());
+    for (const auto& p : plants_) p->saveState(out);
+  }
+  void loadState(ArchiveReader& in) override {
+    const size_t at = in.position();
+    if (in.u64() != plants_.size()) in.fail(at, "the saved L-system plants differ from the session's");
+    for (auto& p : plants_) p->loadState(in);
+  }
+
  private:
   models::SystemContext context_;
   std::vector<std::unique_ptr<LSystem>> plants_;

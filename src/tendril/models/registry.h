@@ -3,6 +3,7 @@
 // one entry in models/builtin_models.cpp.
 #pragma once
 
+#include "tendril/core/archive.h"
 #include "tendril/core/json_reader.h"
 #include "tendril/env/environment.h"
 #include "tendril/plant/plant_model.h"
@@ -35,6 +36,25 @@ class PlantSystem {
   virtual size_t segmentCount() const = 0;
   // The plant's Growth-Flow constants (seed 001): how its growth and motion answer the wind.
   virtual wind::GrowthFlowSpecies growthFlow(size_t /*plant*/) const { return {}; }
+
+  // --- sessions (session/session.h) ---
+  // Everything that decides this system's future steps. loadState is called on a system that
+  // was given the same plants (same specs, in the same order) and overwrites their state, so
+  // that stepping on is bit-identical to never having saved. Model settings that come from
+  // the plant specs (species, grammars, graphs) are not written: the Session keeps the specs.
+  // Damaged input throws Error (from the reader); the system may then be left half-loaded
+  // (the Session discards it).
+  virtual void saveState(ArchiveWriter& out) const = 0;
+  virtual void loadState(ArchiveReader& in) = 0;
+  // Live parameter edits: replaces the plant's model settings with spec.params (same model).
+  virtual void setParams(size_t /*plant*/, const scene::PlantSpec& spec) {
+    throw Error("", "", "plants of model \"" + spec.model + "\" cannot change their settings while growing");
+  }
+  // Removes the node's segment and everything beyond it (interactive cuts, seed 000 §5.1).
+  // Throws Error for a model that cannot be cut or a node out of range.
+  virtual void cut(size_t /*plant*/, uint32_t /*node*/) {
+    throw Error("", "", "plants of this model cannot be cut");
+  }
 };
 
 struct SystemContext {

@@ -86,6 +86,19 @@ void ParticlePlantSystem::addPlant(const scene::PlantSpec& spec, const env::Envi
 
 void ParticlePlantSystem::step(const env::Environment& env) { world_.step(env); }
 
+void ParticlePlantSystem::setParams(size_t plant, const scene::PlantSpec& spec) {
+  const auto* params = spec.paramsAs<ParticleParams>();
+  if (!params) throw Error("", "/species", "expected particle species settings");
+  world_.setSpecies(uint32_t(plant), params->species);
+}
+
+void ParticlePlantSystem::cut(size_t plant, uint32_t node) {
+  const std::vector<uint32_t> particles = world_.snapshotParticles(uint32_t(plant));
+  if (node >= particles.size())
+    throw Error("", "", fmt::format("plant {} has no node {} (it has {})", plant, node, particles.size()));
+  world_.cut(particles[node]);
+}
+
 models::ModelType particleModelType() {
   return {"particles",
           "oriented-particle plants after seed 000 (growth, shape-matching dynamics, anchors, collisions, breaking)",

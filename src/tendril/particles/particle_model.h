@@ -29,6 +29,11 @@ class ParticlePlantSystem final : public models::PlantSystem {
   plant::PlantModel snapshot(size_t plant) const override { return world_.snapshot(uint32_t(plant)); }
   size_t segmentCount() const override { return world_.particleCount(); }
   wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return world_.species(uint32_t(plant)).growthFlow; }
+  void saveState(ArchiveWriter& out) const override { world_.saveState(out); }
+  void loadState(ArchiveReader& in) override { world_.loadState(in); }
+  void setParams(size_t plant, const scene::PlantSpec& spec) override;
+  // The node's particle and everything beyond it fall and disappear (ParticleWorld::cut).
+  void cut(size_t plant, uint32_t node) override;
   ParticleWorld& world() { return world_; }
   const ParticleWorld& world() const { return world_; }
 

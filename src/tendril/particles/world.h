@@ -18,6 +18,7 @@
 // particle order: results are bit-identical for any thread count. Random numbers are keyed by (seed, plant, particle, step, purpose).
 #pragma once
 
+#include "tendril/core/archive.h"
 #include "tendril/env/environment.h"
 #include "tendril/particles/species.h"
 #include "tendril/plant/plant_model.h"
@@ -134,8 +135,19 @@ class ParticleWorld {
   // The plant as a PlantModel; detached pieces that belong to it come out as extra roots with
   // kNodeBroken.
   plant::PlantModel snapshot(uint32_t plant) const;
+  // The particle of each node of snapshot(plant), in node order.
+  std::vector<uint32_t> snapshotParticles(uint32_t plant) const;
+
+  // --- state (world_state.cpp) ---
+  // Every field that decides future steps (the list is in world_state.cpp: a field added to
+  // this class must be added there). loadState expects the same plants, added with the same
+  // species; their species are not written (the Session keeps the plant specs).
+  void saveState(ArchiveWriter& out) const;
+  void loadState(ArchiveReader& in);
 
  private:
+  template <class Self, class Visit>
+  static void visitState(Self& self, Visit&& visit);
   struct Plant {
     std::string name;
     ParticleSpecies species;

@@ -248,6 +248,13 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
   return scene;
 }
 
+PlantSpec parsePlant(const Json& plant, const std::string& source, const std::string& pointer,
+                     const std::filesystem::path& baseDir, size_t index) {
+  if (!plant.is_object()) throw Error(source, pointer, "expected a plant object, got " + describeJson(plant));
+  JsonObject o(plant, source, pointer);
+  return readPlant(o, baseDir, index);
+}
+
 Scene loadScene(const std::filesystem::path& path) {
   if (!std::filesystem::exists(path)) throw Error(path.string(), "", "scene file does not exist");
   Json json = readJsonFile(path);

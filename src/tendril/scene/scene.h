@@ -51,6 +51,11 @@ Scene loadScene(const std::filesystem::path& path);
 // Parses scene JSON; `source` names it in errors, `baseDir` resolves relative paths.
 Scene parseScene(const Json& json, const std::string& source, const std::filesystem::path& baseDir);
 
+// Parses one plant object of a scene (the "plants" entries); `pointer` is its JSON pointer and
+// `index` its place (default name "plant<index>", default seed index + 1).
+PlantSpec parsePlant(const Json& plant, const std::string& source, const std::string& pointer,
+                     const std::filesystem::path& baseDir, size_t index);
+
 // Fills an environment with the scene's obstacles, lights, strokes and wind, and commits it.
 void populateEnvironment(const Scene& scene, env::Environment& env);
 

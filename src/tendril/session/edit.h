@@ -13,6 +13,8 @@
 #include "tendril/core/math.h"
 #include "tendril/env/environment.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -130,7 +132,8 @@ Json editToJson(const Edit& edit);
 // about beyond the edit's own: the caller may read more keys (e.g. "at_step") first.
 Edit readEdit(JsonObject& o);
 
-// An edit at a step count (edit scripts, the session journal).
+// An edit at a step of the script's clock: steps run since the script (or session) started,
+// including those of Step edits; an undo does not turn it back.
 struct TimedEdit {
   uint32_t atStep = 0;
   Edit edit;
@@ -168,23 +171,31 @@ class Editor {
 
   bool dragging() const { return dragging_; }
 
-  // Every applied edit, with the step count it was applied at, in order (steps are merged
-  // into one entry per run of steps). Replaying it on the same starting session gives the
-  // same state (runEditScript).
+  // Steps run through this editor (step() and Step edits): the clock of the journal. Unlike
+  // Session::stepCount() it never goes back (an undo rewinds the session's steps, not this).
+  // Step the session through the editor so that the journal replays it.
+  uint32_t stepsRun() const { return stepsRun_; }
+
+  // Every applied edit, with the editor's clock (stepsRun()) when it was applied, in order
+  // (steps are merged into one entry per run of steps). Replaying it with runEditScript on
+  // the same starting session gives the same state.
   const std::vector<TimedEdit>& journal() const { return journal_; }
-  void setJournal(std::vector<TimedEdit> journal) { journal_ = std::move(journal); }
+  // Continues an earlier journal (a loaded session file): the clock resumes at its end.
+  void setJournal(std::vector<TimedEdit> journal);
 
  private:
   struct Snapshot;
-  void applyEdit(const Edit& edit);
-  void record(const Edit& edit);
+  void record(uint32_t at, const Edit& edit);
   void trim();
 
   Session& session_;
   size_t historyBytesCap_;
   std::vector<Snapshot> undo_, redo_;
   std::vector<TimedEdit> journal_;
+  uint32_t stepsRun_ = 0;
   bool dragging_ = false;
+  uint32_t dragParticle_ = kNoParticle;  // the gesture's particle and strength (drag_move)
+  float dragStrength_ = 0.0f;
 };
 
 // --- picking ---

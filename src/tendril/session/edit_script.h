@@ -26,10 +26,11 @@ EditScript parseEditScript(const Json& json, const std::string& source);
 EditScript loadEditScript(const std::filesystem::path& path);
 Json editScriptToJson(const std::vector<TimedEdit>& edits);
 
-// Replays the script on the editor's session: steps until each edit's at_step (counted from
-// the session's step count when called), applies it, then steps until `totalSteps` steps have
-// run since the start (if more than the last edit needs). An edit that does not fit the
-// session is an Error naming the script and the edit's pointer. `onStep(done)` reports steps.
+// Replays the script on the editor's session: steps until each edit's at_step (counted on the
+// editor's clock, Editor::stepsRun(), from its value when called), applies it, then steps
+// until `totalSteps` steps have run since the start (if more than the last edit needs). An
+// edit that does not fit the session is an Error naming the script and the edit's pointer.
+// `onStep(done)` reports steps.
 void runEditScript(Editor& editor, const EditScript& script, uint32_t totalSteps = 0,
                    const std::function<void(uint32_t)>& onStep = {});
 

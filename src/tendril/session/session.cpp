@@ -1,24 +1,66 @@
 #include "tendril/session/session.h"
 
+#include "tendril/core/archive.h"
 #include "tendril/core/error.h"
+#include "tendril/core/hash.h"
 #include "tendril/particles/particle_model.h"
 
 #include <fmt/format.h>
 
 namespace tendril::session {
 
-Session::Session(scene::Scene scene) : scene_(std::move(scene)), env_(std::make_unique<env::Environment>()) {
+namespace {
+
+constexpr uint32_t kStateTag = 0x54535331;  // "1SST"
+constexpr uint32_t kStateVersion = 1;
+
+void saveWind(ArchiveWriter& out, const env::WindSettings& w) {
+  out.value(w.mode);
+  out.value(w.velocity);
+  out.f32(w.gustStrength), out.f32(w.gustPeriod), out.f32(w.gustScale), out.f32(w.gustTurn);
+  out.u64(w.seed);
+  out.vector(w.emitters);
+}
+
+env::WindSettings loadWind(ArchiveReader& in) {
+  env::WindSettings w;
+  const size_t at = in.position();
+  in.value(w.mode);
+  if (uint32_t(w.mode) > uint32_t(env::WindMode::Sph)) in.fail(at, "unknown wind mode");
+  in.value(w.velocity);
+  w.gustStrength = in.f32(), w.gustPeriod = in.f32(), w.gustScale = in.f32(), w.gustTurn = in.f32();
+  w.seed = in.u64();
+  in.vector(w.emitters);
+  return w;
+}
+
+wind::SphEmitter sphEmitter(const env::WindEmitter& e) {
+  wind::SphEmitter se;
+  se.position = e.position;
+  se.direction = e.direction;
+  se.speed = e.speed;
+  se.rate = e.rate;
+  se.radius = e.radius;
+  return se;
+}
+
+}  // namespace
+
+Session::Session(scene::Scene scene) : Session(std::move(scene), Json(), {}) {}
+
+Session::Session(scene::Scene scene, Json sceneDocument, std::filesystem::path baseDir)
+    : scene_(std::move(scene)),
+      sceneDocument_(std::move(sceneDocument)),
+      baseDir_(std::move(baseDir)),
+      env_(std::make_unique<env::Environment>()) {
+  if (baseDir_.empty() && !scene_.path.empty()) baseDir_ = scene_.path.parent_path();
   scene::populateEnvironment(scene_, *env_);
-  const models::SystemContext context{scene_.seed, scene_.stepTime};
-  for (const scene::PlantSpec& p : scene_.plants) {
-    size_t s = 0;
-    while (s < systemModels_.size() && systemModels_[s] != p.model) ++s;
-    if (s == systems_.size()) {
-      const models::ModelType* type = models::findModelType(p.model);
-      if (!type) throw Error(scene_.source, p.pointer + "/model", fmt::format("unknown model \"{}\"", p.model));
-      systems_.push_back(type->createSystem(context));
-      systemModels_.push_back(p.model);
-    }
+  const Json* plants = sceneDocument_.is_object() && sceneDocument_.contains("plants") ? &sceneDocument_["plants"]
+                                                                                        : nullptr;
+  for (size_t i = 0; i < scene_.plants.size(); ++i) {
+    const scene::PlantSpec& p = scene_.plants[i];
+    size_t s = systemFor(p.model);
+    if (s == systems_.size()) throw Error(scene_.source, p.pointer + "/model", fmt::format("unknown model \"{}\"", p.model));
     try {
       systems_[s]->addPlant(p, *env_);
     } catch (const Error& e) {
@@ -26,6 +68,9 @@ Session::Session(scene::Scene scene) : scene_(std::move(scene)), env_(std::make_
                   e.message());
     }
     plants_.push_back({s, systems_[s]->plantCount() - 1});
+    Json description = plants && plants->is_array() && i < plants->size() ? (*plants)[i] : Json();
+    std::string text = description.is_null() ? std::string() : description.dump();
+    specs_.push_back({p, std::move(description), std::move(text)});
   }
   // Simulated air (seed 000 §5.3): the scene's emitters feed it, the wind field samples it.
   if (scene_.wind.mode == env::WindMode::Sph) {
@@ -33,29 +78,36 @@ Session::Session(scene::Scene scene) : scene_(std::move(scene)), env_(std::make_
     for (const auto& s : systems_)
       if (auto* p = dynamic_cast<const particles::ParticlePlantSystem*>(s.get())) settings.dt = p->world().settings().dt;
     air_ = std::make_unique<wind::SphAir>(settings);
-    for (const env::WindEmitter& e : scene_.wind.emitters) {
-      wind::SphEmitter se;
-      se.position = e.position;
-      se.direction = e.direction;
-      se.speed = e.speed;
-      se.rate = e.rate;
-      se.radius = e.radius;
-      air_->addEmitter(se);
-    }
+    for (const env::WindEmitter& e : scene_.wind.emitters) air_->addEmitter(sphEmitter(e));
     if (scene_.sphFill) air_->fillBox(settings.domainMin, settings.domainMax, *env_, scene_.wind.velocity);
     env_->setAirFlow(air_.get());
   }
 }
 
+std::unique_ptr<Session> Session::open(const std::filesystem::path& scenePath) {
+  if (!std::filesystem::exists(scenePath)) throw Error(scenePath.string(), "", "scene file does not exist");
+  Json json = readJsonFile(scenePath);
+  scene::Scene scene = scene::parseScene(json, scenePath.string(), scenePath.parent_path());
+  scene.path = scenePath;
+  return std::make_unique<Session>(std::move(scene), std::move(json), scenePath.parent_path());
+}
+
 Session::~Session() = default;
+
+size_t Session::systemFor(const std::string& model) {
+  for (size_t s = 0; s < systemModels_.size(); ++s)
+    if (systemModels_[s] == model) return s;
+  const models::ModelType* type = models::findModelType(model);
+  if (!type) return systems_.size();
+  systems_.push_back(type->createSystem(models::SystemContext{scene_.seed, scene_.stepTime}));
+  systemModels_.push_back(model);
+  return systems_.size() - 1;
+}
 
 void Session::step() {
   if (air_) {
     // The air and the particle plants act on each other (two-way coupling), then the plants step.
-    particles::ParticleWorld* world = nullptr;
-    for (auto& s : systems_)
-      if (auto* p = dynamic_cast<particles::ParticlePlantSystem*>(s.get())) world = &p->world();
-    air_->step(*env_, world);
+    air_->step(*env_, particleWorld());
   }
   for (auto& s : systems_) s->step(*env_);
   ++steps_;
@@ -92,6 +144,265 @@ size_t Session::segmentCount() const {
   size_t n = 0;
   for (const auto& s : systems_) n += s->segmentCount();
   return n;
+}
+
+particles::ParticleWorld* Session::particleWorld() {
+  for (auto& s : systems_)
+    if (auto* p = dynamic_cast<particles::ParticlePlantSystem*>(s.get())) return &p->world();
+  return nullptr;
+}
+
+const particles::ParticleWorld* Session::particleWorld() const {
+  for (const auto& s : systems_)
+    if (auto* p = dynamic_cast<const particles::ParticlePlantSystem*>(s.get())) return &p->world();
+  return nullptr;
+}
+
+uint32_t Session::addPlant(scene::PlantSpec spec, Json description) {
+  for (const SpecEntry& e : specs_)
+    if (&e - specs_.data() < std::ptrdiff_t(plants_.size()) && e.spec.name == spec.name)
+      throw Error("", "/name", fmt::format("plant name \"{}\" is used twice", spec.name));
+  const size_t systemsBefore = systems_.size();
+  const size_t s = systemFor(spec.model);
+  if (s == systems_.size()) throw Error("", "/model", fmt::format("unknown model \"{}\"", spec.model));
+  try {
+    systems_[s]->addPlant(spec, *env_);
+  } catch (const Error&) {
+    if (systems_.size() > systemsBefore) {  // a system made for this plant alone goes again
+      systems_.pop_back();
+      systemModels_.pop_back();
+    }
+    throw;
+  }
+  plants_.push_back({s, systems_[s]->plantCount() - 1});
+  // Specs beyond the current plants belong to undone edits: a new plant replaces them.
+  specs_.resize(plants_.size() - 1);
+  std::string text = description.is_null() ? std::string() : description.dump();
+  specs_.push_back({std::move(spec), std::move(description), std::move(text)});
+  return uint32_t(plants_.size() - 1);
+}
+
+uint32_t Session::addPlant(const Json& plant, const std::string& source) {
+  scene::PlantSpec spec = scene::parsePlant(plant, source, "", baseDir_, plants_.size());
+  try {
+    return addPlant(std::move(spec), plant);
+  } catch (const Error& e) {
+    // As for scene plants: the model's errors are placed in the plant object.
+    throw Error(source, e.location().empty() ? "/position" : e.location(), e.message());
+  }
+}
+
+void Session::setPlantDescription(size_t plant, const Json& description, const std::string& source) {
+  if (plant >= plants_.size()) throw Error(source, "", fmt::format("there is no plant {}", plant));
+  scene::PlantSpec spec = scene::parsePlant(description, source, "", baseDir_, plant);
+  SpecEntry& entry = specs_[plant];
+  if (spec.model != entry.spec.model)
+    throw Error(source, "/model", fmt::format("plant {} is of model \"{}\", not \"{}\"", plant, entry.spec.model, spec.model));
+  try {
+    system(plant).setParams(indexInSystem(plant), spec);
+  } catch (const Error& e) {
+    if (!e.source().empty()) throw;
+    throw Error(source, e.location(), e.message());
+  }
+  entry.spec = std::move(spec);
+  entry.description = description;
+  entry.text = description.dump();
+}
+
+void Session::environmentChanged() { env_->commit(); }
+
+std::vector<uint8_t> Session::saveState() const {
+  ArchiveWriter out;
+  out.tag(kStateTag);
+  out.u32(kStateVersion);
+  out.u32(steps_);
+  out.u64(plants_.size());
+  for (size_t i = 0; i < plants_.size(); ++i) {
+    out.string(specs_[i].spec.model);
+    out.string(specs_[i].text);
+  }
+  // The environment's editable state; obstacle meshes come from the scene.
+  out.u64(env_->obstacleCount());
+  for (uint32_t o = 0; o < env_->obstacleCount(); ++o) out.value(env_->obstacle(o).worldFromLocal);
+  out.vector(env_->lights());
+  out.u64(env_->strokes().size());
+  for (const env::Stroke& s : env_->strokes()) {
+    out.boolean(s.attract);
+    out.f32(s.radius);
+    out.f32(s.strength);
+    out.vector(s.points);
+  }
+  saveWind(out, env_->windField().settings());
+  out.u64(systems_.size());
+  for (size_t s = 0; s < systems_.size(); ++s) {
+    out.string(systemModels_[s]);
+    systems_[s]->saveState(out);
+  }
+  out.boolean(air_ != nullptr);
+  if (air_) air_->saveState(out);
+  return out.take();
+}
+
+void Session::loadState(std::span<const uint8_t> bytes, const std::string& source) {
+  ArchiveReader in(bytes, source);
+  in.tag(kStateTag, "a session state");
+  const size_t versionAt = in.position();
+  const uint32_t version = in.u32();
+  if (version != kStateVersion)
+    in.fail(versionAt, fmt::format("session state version {} is not supported (this build reads {})", version,
+                                   kStateVersion));
+  const uint32_t steps = in.u32();
+
+  // The plants: the ones this session knows by the same description are reused; others are
+  // read again from their scene-file objects.
+  const uint64_t plantCount = in.count(16, "plants");
+  std::vector<SpecEntry> specs;
+  for (uint64_t i = 0; i < plantCount; ++i) {
+    const size_t at = in.position();
+    std::string model = in.string();
+    std::string text = in.string();
+    if (i < specs_.size() && specs_[i].spec.model == model && specs_[i].text == text) {
+      specs.push_back(specs_[i]);
+      continue;
+    }
+    if (text.empty()) in.fail(at, fmt::format("plant {} was added from code and cannot be restored here", i));
+    Json description;
+    try {
+      description = parseJson(text, source);
+    } catch (const Error& e) {
+      in.fail(at, fmt::format("plant {}: {}", i, e.message()));
+    }
+    scene::PlantSpec spec = scene::parsePlant(description, source, fmt::format("/plants/{}", i), baseDir_, i);
+    if (spec.model != model) in.fail(at, fmt::format("plant {} is of model \"{}\", not \"{}\"", i, spec.model, model));
+    specs.push_back({std::move(spec), std::move(description), std::move(text)});
+  }
+
+  const size_t obstaclesAt = in.position();
+  const uint64_t obstacles = in.u64();
+  if (obstacles != env_->obstacleCount())
+    in.fail(obstaclesAt, fmt::format("the saved environment has {} obstacles, the scene {}", obstacles,
+                                     env_->obstacleCount()));
+  std::vector<RigidTransform> transforms(obstacles);
+  for (RigidTransform& t : transforms) in.value(t);
+  std::vector<env::Light> lights = in.vector<env::Light>();
+  std::vector<env::Stroke> strokes(size_t(in.count(17, "strokes")));
+  for (env::Stroke& s : strokes) {
+    s.attract = in.boolean();
+    s.radius = in.f32();
+    s.strength = in.f32();
+    in.vector(s.points);
+  }
+  env::WindSettings wind = loadWind(in);
+
+  // Systems made afresh for the saved plants (seeded in an empty world: their seeds are not
+  // checked against obstacles that may have moved since), then given their saved state.
+  env::Environment empty;
+  empty.commit();
+  std::vector<std::unique_ptr<models::PlantSystem>> systems;
+  std::vector<std::string> systemModels;
+  std::vector<PlantRef> plants;
+  for (const SpecEntry& e : specs) {
+    size_t s = 0;
+    while (s < systemModels.size() && systemModels[s] != e.spec.model) ++s;
+    if (s == systems.size()) {
+      const models::ModelType* type = models::findModelType(e.spec.model);
+      if (!type) in.fail(fmt::format("unknown model \"{}\"", e.spec.model));
+      systems.push_back(type->createSystem(models::SystemContext{scene_.seed, scene_.stepTime}));
+      systemModels.push_back(e.spec.model);
+    }
+    try {
+      systems[s]->addPlant(e.spec, empty);
+    } catch (const Error& err) {
+      in.fail(fmt::format("plant \"{}\": {}", e.spec.name, err.message()));
+    }
+    plants.push_back({s, systems[s]->plantCount() - 1});
+  }
+  const size_t systemsAt = in.position();
+  if (in.u64() != systems.size()) in.fail(systemsAt, "the saved plant systems differ from the saved plants");
+  for (size_t s = 0; s < systems.size(); ++s) {
+    const size_t at = in.position();
+    if (in.string() != systemModels[s]) in.fail(at, "the saved plant systems differ from the saved plants");
+    systems[s]->loadState(in);
+  }
+  const size_t airAt = in.position();
+  const bool hasAir = in.boolean();
+  if (hasAir != (air_ != nullptr))
+    in.fail(airAt, hasAir ? "the saved state has simulated air, this scene has none"
+                          : "the saved state has no simulated air, this scene has");
+  std::unique_ptr<wind::SphAir> air;
+  if (hasAir) {
+    air = std::make_unique<wind::SphAir>(air_->settings());
+    air->loadState(in);
+  }
+  if (!in.atEnd()) in.fail("unexpected data after the session state");
+
+  // Everything read: now the session changes.
+  for (uint32_t o = 0; o < transforms.size(); ++o) env_->setObstacleTransform(o, transforms[o]);
+  env_->setLights(std::move(lights));
+  env_->setStrokes(std::move(strokes));
+  env_->setWind(std::move(wind));
+  if (air) {
+    air_ = std::move(air);
+    env_->setAirFlow(air_.get());
+  }
+  env_->commit();
+  systems_ = std::move(systems);
+  systemModels_ = std::move(systemModels);
+  plants_ = std::move(plants);
+  // Specs beyond the restored plants are kept (a redo may bring their plants back).
+  for (size_t i = 0; i < specs.size(); ++i) {
+    if (i < specs_.size())
+      specs_[i] = std::move(specs[i]);
+    else
+      specs_.push_back(std::move(specs[i]));
+  }
+  steps_ = steps;
+}
+
+void Session::setEmitters(std::vector<env::WindEmitter> emitters) {
+  env::WindSettings w = env_->windField().settings();
+  if (air_) {
+    // Checked first, so that a bad emitter leaves the air as it was.
+    wind::SphAir check(air_->settings());
+    for (const env::WindEmitter& e : emitters) check.addEmitter(sphEmitter(e));
+    air_->clearEmitters();
+    for (const env::WindEmitter& e : emitters) air_->addEmitter(sphEmitter(e));
+  }
+  w.emitters = std::move(emitters);
+  env_->setWind(std::move(w));
+}
+
+uint64_t Session::stateHash() const {
+  Hasher h;
+  h.add(steps_);
+  h.add(uint64_t(plants_.size()));
+  for (const plant::PlantModel& p : plants()) h.add(plant::contentHash(p));
+  for (size_t i = 0; i < plants_.size(); ++i) h.add(std::string_view(specs_[i].text));
+  h.add(uint64_t(env_->obstacleCount()));
+  for (uint32_t o = 0; o < env_->obstacleCount(); ++o) {
+    const RigidTransform& t = env_->obstacle(o).worldFromLocal;
+    h.add(t.rotation.coeffs().data(), 4 * sizeof(float));
+    h.add(t.translation);
+  }
+  for (const env::Light& l : env_->lights()) {
+    h.add(uint32_t(l.type)), h.add(l.direction), h.add(l.position), h.add(l.intensity), h.add(l.angularRadius);
+    h.add(l.samples);
+  }
+  for (const env::Stroke& s : env_->strokes()) {
+    h.add(uint8_t(s.attract)), h.add(s.radius), h.add(s.strength), h.add(s.points);
+  }
+  const env::WindSettings& w = env_->windField().settings();
+  h.add(uint32_t(w.mode)), h.add(w.velocity), h.add(w.gustStrength), h.add(w.gustPeriod), h.add(w.gustScale);
+  h.add(w.gustTurn), h.add(w.seed);
+  for (const env::WindEmitter& e : w.emitters) {
+    h.add(e.position), h.add(e.direction), h.add(e.speed), h.add(e.radius), h.add(e.reach), h.add(e.spread);
+    h.add(e.rate);
+  }
+  if (air_) {
+    h.add(air_->positions());
+    h.add(air_->velocities());
+  }
+  return h.digest();
 }
 
 }  // namespace tendril::session

@@ -8,6 +8,8 @@
 #include "tendril/scene/scene.h"
 #include "tendril/wind/sph.h"
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -92,6 +94,9 @@ class Session {
   void loadState(std::span<const uint8_t> bytes, const std::string& source = "session state");
   // Hash of every plant snapshot and the environment's editable state (undo checks, tests).
   uint64_t stateHash() const;
+  // Replaces the wind emitters (and, in sph mode, the simulated air's). Throws Error for an
+  // emitter the air cannot use, leaving everything as it was.
+  void setEmitters(std::vector<env::WindEmitter> emitters);
   // Commits environment edits (obstacle moves, strokes) and refreshes what depends on them.
   void environmentChanged();
 

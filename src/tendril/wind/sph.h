@@ -16,6 +16,7 @@
 // Units: metres, seconds, kilograms; see docs/sph.md for the equations and defaults.
 #pragma once
 
+#include "tendril/core/archive.h"
 #include "tendril/core/math.h"
 #include "tendril/env/wind_field.h"
 
@@ -123,6 +124,12 @@ class SphAir final : public env::AirFlow {
   const SphTimings& timings() const { return timings_; }
   // Grown branch particles of the plants that interacted with the air in the last step.
   size_t coupledPlantParticles() const;
+
+  // The air's state: emitters, particles and the per-particle obstacle distances (sessions,
+  // undo; sph_state.cpp). The settings are not written: loadState expects an SphAir made with
+  // the same settings. Damaged input throws Error (from the reader).
+  void saveState(ArchiveWriter& out) const;
+  void loadState(ArchiveReader& in);
 
  private:
   struct Grid;

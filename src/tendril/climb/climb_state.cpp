@@ -1,0 +1,128 @@
+// Saving, restoring and cutting climbing plants (sessions, undo, interactive cuts).
+#include "tendril/climb/climb_system.h"
+
+#include "tendril/core/error.h"
+#include "tendril/plant/plant_archive.h"
+
+#include <fmt/format.h>
+
+namespace tendril::climb {
+
+namespace {
+
+constexpr uint32_t kClimbTag = 0x4d4c4331;  // "1CLM"
+
+}  // namespace
+
+void ClimbSystem::rebuildOccupancy() {
+  OccupancyGrid grid(occupancy_.cell());
+  for (const auto& p : plants_)
+    for (const Vec3& e : p->nodeEnd) grid.insert(e);
+  occupancy_ = std::move(grid);
+}
+
+void ClimbSystem::saveState(ArchiveWriter& out) const {
+  out.tag(kClimbTag);
+  out.u32(step_);
+  out.u64(plants_.size());
+  for (const auto& p : plants_) {
+    plant::savePlantModel(out, p->model);
+    out.vector(p->birthStep);
+    out.vector(p->nodeEnd);
+    out.vector(p->tips);
+    out.u64(p->nextTipId);
+    out.boolean(p->capped);
+  }
+}
+
+void ClimbSystem::loadState(ArchiveReader& in) {
+  in.tag(kClimbTag, "climbing plants");
+  step_ = in.u32();
+  const size_t at = in.position();
+  const uint64_t n = in.u64();
+  if (n != plants_.size())
+    in.fail(at, fmt::format("the saved climbing plants are {}, the session has {}", n, plants_.size()));
+  for (auto& p : plants_) {
+    plant::loadPlantModel(in, p->model);
+    in.vector(p->birthStep);
+    in.vector(p->nodeEnd);
+    in.vector(p->tips);
+    p->nextTipId = in.u64();
+    p->capped = in.boolean();
+    const size_t nodes = p->model.nodeCount();
+    if (p->birthStep.size() != nodes || p->nodeEnd.size() != nodes)
+      in.fail("the node records of a saved climbing plant differ in length");
+    for (uint32_t b : p->birthStep)
+      if (b > step_) in.fail("a node of a saved climbing plant was born after the saved step");
+    for (const Tip& t : p->tips)
+      if (t.lastNode < -1 || t.lastNode >= int32_t(nodes)) in.fail("a tip of a saved climbing plant has no node");
+  }
+  rebuildOccupancy();
+}
+
+void ClimbSystem::cut(uint32_t plantId, uint32_t node) {
+  if (plantId >= plants_.size()) throw Error("", "", fmt::format("there is no climbing plant {}", plantId));
+  Plant& p = *plants_[plantId];
+  plant::PlantModel& m = p.model;
+  const size_t n = m.nodeCount();
+  if (node >= n) throw Error("", "", fmt::format("plant \"{}\" has no node {} (it has {})", p.def.name, node, n));
+  // Parents come before children: one forward pass marks the whole subtree.
+  std::vector<char> gone(n, 0);
+  gone[node] = 1;
+  for (size_t i = node + 1; i < n; ++i)
+    if (m.parent[i] >= 0 && gone[m.parent[i]]) gone[i] = 1;
+  std::vector<int32_t> remap(n, -1);
+  plant::PlantModel kept = m;
+  kept.position.clear(), kept.orientation.clear(), kept.length.clear(), kept.radius.clear();
+  kept.parent.clear(), kept.age.clear(), kept.order.clear(), kept.flags.clear();
+  kept.leafNode.clear(), kept.leafOffset.clear(), kept.leafRotation.clear(), kept.leafSize.clear();
+  kept.leafThickness.clear(), kept.leafPetiole.clear(), kept.leafShape.clear(), kept.leafMotion.clear();
+  std::vector<uint32_t> birth;
+  std::vector<Vec3> ends;
+  for (size_t i = 0; i < n; ++i) {
+    if (gone[i]) continue;
+    remap[i] = int32_t(kept.position.size());
+    kept.position.push_back(m.position[i]);
+    kept.orientation.push_back(m.orientation[i]);
+    kept.length.push_back(m.length[i]);
+    kept.radius.push_back(m.radius[i]);
+    kept.parent.push_back(m.parent[i] < 0 ? -1 : remap[m.parent[i]]);
+    kept.age.push_back(m.age[i]);
+    kept.order.push_back(m.order[i]);
+    kept.flags.push_back(m.flags[i]);
+    birth.push_back(p.birthStep[i]);
+    ends.push_back(p.nodeEnd[i]);
+  }
+  for (size_t l = 0; l < m.leafCount(); ++l) {
+    if (gone[m.leafNode[l]]) continue;
+    kept.leafNode.push_back(remap[m.leafNode[l]]);
+    kept.leafOffset.push_back(m.leafOffset[l]);
+    kept.leafRotation.push_back(m.leafRotation[l]);
+    kept.leafSize.push_back(m.leafSize[l]);
+    kept.leafThickness.push_back(m.leafThickness[l]);
+    kept.leafPetiole.push_back(m.leafPetiole[l]);
+    kept.leafShape.push_back(m.leafShape[l]);
+    kept.leafMotion.push_back(m.leafMotion[l]);
+  }
+  std::vector<Tip> tips;
+  for (Tip t : p.tips) {
+    if (t.lastNode >= 0 && gone[t.lastNode]) continue;
+    if (t.lastNode >= 0) t.lastNode = remap[t.lastNode];
+    tips.push_back(t);
+  }
+  // The cut end stops growing: the parent is a dead end unless a tip or another child goes on.
+  const int32_t parent = m.parent[node] < 0 ? -1 : remap[m.parent[node]];
+  if (parent >= 0) {
+    bool continues = false;
+    for (const Tip& t : tips) continues |= t.lastNode == parent;
+    for (int32_t q : kept.parent) continues |= q == parent;
+    if (!continues) kept.flags[parent] |= plant::kNodeDead;
+  }
+  m = std::move(kept);
+  p.birthStep = std::move(birth);
+  p.nodeEnd = std::move(ends);
+  p.tips = std::move(tips);
+  rebuildOccupancy();
+}
+
+}  // namespace tendril::climb

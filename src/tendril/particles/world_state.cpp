@@ -1,0 +1,149 @@
+// Saving and restoring a ParticleWorld exactly (sessions, undo): every field that decides
+// future steps, listed once in visitState().
+#include "tendril/particles/world.h"
+
+#include "tendril/core/error.h"
+
+#include <fmt/format.h>
+
+namespace tendril::particles {
+
+namespace {
+
+constexpr uint32_t kWorldTag = 0x57505431;  // "1TPW"
+
+}  // namespace
+
+// The one list of the world's state. Per-particle arrays and records (AttachedLeaf, FlowState,
+// the shape-matching and hash caches) go in as raw blocks, so a field added to such a record is
+// covered; a new member of ParticleWorld must be added here. The caches are written too (it is
+// cheaper than proving that rebuilding them gives the same bits); only the obstacle-clearance
+// proof is dropped on load (clearanceEnv_), which is exact: it only skips distance samples
+// that could not push a particle (collideObstacles()).
+template <class Self, class Visit>
+void ParticleWorld::visitState(Self& w, Visit&& v) {
+  v(w.settings_);
+  v(w.time_), v(w.step_), v(w.active_);
+  v(w.x_), v(w.xp_), v(w.v_), v(w.w_), v(w.xr_);
+  v(w.q_), v(w.qp_), v(w.qr_), v(w.groupRotation_);
+  v(w.a_), v(w.b_), v(w.m_), v(w.age_);
+  v(w.flags_), v(w.plant_), v(w.parent_), v(w.firstChild_), v(w.nextSibling_);
+  v(w.targetHalfLength_), v(w.restTime_), v(w.anchor_), v(w.anchorPhi_);
+  v(w.branchIndex_), v(w.order_), v(w.leafShape_), v(w.leafTarget_), v(w.flow_);
+  v(w.freeList_), v(w.externalAcceleration_), v(w.leaves_);
+  v(w.goal_), v(w.correction_);
+  v(w.clearance_), v(w.clearanceObstacles_);
+  v(w.pieceStart_), v(w.pieceOrder_), v(w.matchParent_), v(w.matchChildBegin_), v(w.matchChildEnd_);
+  v(w.matchNode_), v(w.matchRest_);
+  v(w.topologyVersion_), v(w.pieceOrderVersion_);
+  v(w.hashParticles_), v(w.hashBucket_), v(w.hashStart_), v(w.hashEntries_), v(w.hashInv_);
+  v(w.dragParticle_), v(w.dragTarget_), v(w.dragStrength_);
+  v(w.occlusion_.origin), v(w.occlusion_.cell), v(w.occlusion_.dims), v(w.occlusion_.density);
+}
+
+namespace {
+
+struct SaveField {
+  ArchiveWriter& out;
+  template <class T>
+  void operator()(const std::vector<T>& v) const {
+    out.vector(v);
+  }
+  template <ArchivePlain T>
+  void operator()(const T& v) const {
+    out.value(v);
+  }
+};
+
+struct LoadField {
+  ArchiveReader& in;
+  template <class T>
+  void operator()(std::vector<T>& v) const {
+    in.vector(v);
+  }
+  template <ArchivePlain T>
+  void operator()(T& v) const {
+    in.value(v);
+  }
+};
+
+}  // namespace
+
+void ParticleWorld::saveState(ArchiveWriter& out) const {
+  out.tag(kWorldTag);
+  out.u64(plants_.size());
+  for (const Plant& p : plants_) {
+    out.string(p.name);
+    out.u64(p.seed);
+    out.u32(p.root);
+    out.u64(p.particles);
+    out.boolean(p.capped);
+  }
+  visitState(*this, SaveField{out});
+}
+
+void ParticleWorld::loadState(ArchiveReader& in) {
+  in.tag(kWorldTag, "a particle world");
+  const size_t at = in.position();
+  const uint64_t n = in.u64();
+  if (n != plants_.size())
+    in.fail(at, fmt::format("the saved particle world has {} plants, the session {}", n, plants_.size()));
+  for (Plant& p : plants_) {
+    p.name = in.string();
+    p.seed = in.u64();
+    p.root = in.u32();
+    p.particles = size_t(in.u64());
+    p.capped = in.boolean();
+  }
+  visitState(*this, LoadField{in});
+  // Every per-particle array must have one slot per particle, and links must stay in range:
+  // damaged input is an Error here, not a crash in the next step.
+  const size_t cap = flags_.size();
+  const size_t sizes[] = {x_.size(), xp_.size(), v_.size(), w_.size(), xr_.size(), q_.size(), qp_.size(),
+                          qr_.size(), groupRotation_.size(), a_.size(), b_.size(), m_.size(), age_.size(),
+                          plant_.size(), parent_.size(), firstChild_.size(), nextSibling_.size(),
+                          targetHalfLength_.size(), restTime_.size(), anchor_.size(), anchorPhi_.size(),
+                          branchIndex_.size(), order_.size(), leafShape_.size(), leafTarget_.size(), flow_.size()};
+  for (size_t s : sizes)
+    if (s != cap) in.fail("the particle arrays of the saved world differ in length");
+  auto link = [&](uint32_t i) { return i == kNone || i < cap; };
+  for (size_t i = 0; i < cap; ++i)
+    if (!link(parent_[i]) || !link(firstChild_[i]) || !link(nextSibling_[i]) ||
+        ((flags_[i] & kActive) && plant_[i] >= plants_.size()))
+      in.fail(fmt::format("particle {} of the saved world links outside the world", i));
+  for (const Plant& p : plants_)
+    if (!link(p.root)) in.fail("a plant root of the saved world lies outside the world");
+  for (const AttachedLeaf& l : leaves_)
+    if (l.particle >= cap) in.fail("a leaf of the saved world hangs from no particle");
+  for (uint32_t f : freeList_)
+    if (f >= cap) in.fail("the free list of the saved world lies outside the world");
+  if (!link(dragParticle_)) in.fail("the dragged particle of the saved world lies outside the world");
+  clearanceEnv_ = nullptr;
+}
+
+std::vector<uint32_t> ParticleWorld::snapshotParticles(uint32_t plantId) const {
+  // The same walk as snapshot(): the plant's tree depth first, children in creation order,
+  // then its detached pieces in slot order; leaf particles are not nodes.
+  const Plant& pl = plants_.at(plantId);
+  std::vector<uint32_t> out;
+  auto addTree = [&](uint32_t root) {
+    std::vector<uint32_t> stack = {root};
+    while (!stack.empty()) {
+      uint32_t i = stack.back();
+      stack.pop_back();
+      if (flags_[i] & kLeaf) continue;
+      out.push_back(i);
+      std::vector<uint32_t> kids;
+      for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) kids.push_back(c);
+      for (auto it = kids.rbegin(); it != kids.rend(); ++it) stack.push_back(*it);
+    }
+  };
+  if (pl.root != kNone && (flags_[pl.root] & kActive)) addTree(pl.root);
+  for (uint32_t i = 0; i < capacity(); ++i)
+    if ((flags_[i] & kActive) && plant_[i] == plantId && (flags_[i] & kDetached) && parent_[i] == kNone &&
+        !(flags_[i] & kLeaf))
+      addTree(i);
+  return out;
+}
+
+}  // namespace tendril::particles

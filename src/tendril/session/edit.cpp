@@ -1,0 +1,658 @@
+#include "tendril/session/edit.h"
+
+#include "tendril/core/error.h"
+#include "tendril/models/registry.h"
+#include "tendril/particles/world.h"
+#include "tendril/session/session.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+namespace tendril::session {
+
+namespace {
+
+// --- JSON ---
+
+Json vec3Json(const Vec3& v) { return Json::array({v.x(), v.y(), v.z()}); }
+
+// Angles are degrees in files (docs/edit-scripts.md); the conversion runs in double, so a
+// float survives the round trip exactly.
+double toDegrees(float radians) { return double(radians) * (180.0 / 3.14159265358979323846); }
+float fromDegrees(double degrees) { return float(degrees * (3.14159265358979323846 / 180.0)); }
+
+// A direction as written, not normalised: the edit normalises it when applied, so that an edit
+// read back from its own JSON is the same value (journals replay bit for bit).
+Vec3 readDirection(JsonObject& o, std::string_view key, const Vec3& fallback) {
+  const Vec3 v = o.vec3(key, fallback);
+  if (v.squaredNorm() == 0.0f) throw o.error(key, "must not be the zero vector");
+  return v;
+}
+
+uint32_t readIndex(JsonObject& o, std::string_view key) {
+  if (!o.has(key)) throw o.error(key, "is required (an index, counting from 0)");
+  return uint32_t(o.integer(key, 0, 0, std::numeric_limits<uint32_t>::max() - 1));
+}
+
+Json emitterJson(const env::WindEmitter& e) {
+  return Json{{"position", vec3Json(e.position)}, {"direction", vec3Json(e.direction)}, {"speed", e.speed},
+              {"radius", e.radius},                {"reach", e.reach},                    {"spread", toDegrees(e.spread)},
+              {"rate", e.rate}};
+}
+
+env::WindEmitter readEmitter(JsonObject& o) {
+  env::WindEmitter e;
+  if (!o.has("position")) throw o.error("position", "is required (the emitter's centre, [x, y, z] in m)");
+  e.position = o.vec3("position", e.position);
+  e.direction = readDirection(o, "direction", e.direction);
+  e.speed = o.numberf("speed", e.speed, 0.0, 1000.0);
+  e.radius = o.numberf("radius", e.radius, 1e-4, 1000.0);
+  e.reach = o.numberf("reach", e.reach, 0.0, 1e6);
+  e.spread = fromDegrees(o.number("spread", toDegrees(e.spread), 0.0, 89.0));
+  e.rate = o.numberf("rate", e.rate, 0.0, 1e9);
+  return e;
+}
+
+Json lightJson(const env::Light& l) {
+  return Json{{"type", l.type == env::Light::Type::Point ? "point" : "directional"},
+              {"position", vec3Json(l.position)},
+              {"direction", vec3Json(l.direction)},
+              {"intensity", l.intensity},
+              {"angular_radius", toDegrees(l.angularRadius)},
+              {"samples", l.samples}};
+}
+
+env::Light readLight(JsonObject& o) {
+  env::Light l;
+  l.type = o.choice("type", "directional", {"directional", "point"}) == "point" ? env::Light::Type::Point
+                                                                                : env::Light::Type::Directional;
+  l.position = o.vec3("position", l.position);
+  l.direction = readDirection(o, "direction", l.direction);
+  l.intensity = o.numberf("intensity", l.intensity, 0.0, 1e6);
+  l.angularRadius = fromDegrees(o.number("angular_radius", 0.0, 0.0, 45.0));
+  l.samples = int(o.integer("samples", l.samples, 1, 256));
+  return l;
+}
+
+template <class... F>
+struct Overloaded : F... {
+  using F::operator()...;
+};
+template <class... F>
+Overloaded(F...) -> Overloaded<F...>;
+
+// --- applying ---
+
+void requirePlant(const Session& s, uint32_t plant, const char* what) {
+  if (plant >= s.plantCount())
+    throw Error(what, "/plant", fmt::format("there is no plant {} (the session has {})", plant, s.plantCount()));
+}
+
+// The particle world and the plant's index in it; Error when the plant is not a particle plant.
+particles::ParticleWorld& particlePlant(Session& s, uint32_t plant, const char* what, uint32_t* worldPlant) {
+  requirePlant(s, plant, what);
+  if (s.plantSpec(plant).model != "particles")
+    throw Error(what, "/plant",
+                fmt::format("plant {} is of model \"{}\"; only particle plants can do this", plant,
+                            s.plantSpec(plant).model));
+  *worldPlant = uint32_t(s.indexInSystem(plant));
+  return *s.particleWorld();
+}
+
+void requireParticle(const particles::ParticleWorld& w, uint32_t worldPlant, uint32_t particle, const char* what) {
+  if (particle >= w.capacity() || !w.active(particle) || w.plantOf(particle) != worldPlant ||
+      (w.flags(particle) & particles::kDetached))
+    throw Error(what, "/particle", fmt::format("particle {} is not part of the plant", particle));
+}
+
+void requireFinite(const Vec3& v, const char* what, const char* key) {
+  if (!isFinite(v)) throw Error(what, std::string("/") + key, "is not finite");
+}
+
+env::WindEmitter checkedEmitter(env::WindEmitter e, const char* what) {
+  requireFinite(e.position, what, "position");
+  requireFinite(e.direction, what, "direction");
+  if (e.direction.squaredNorm() == 0.0f) throw Error(what, "/direction", "must not be zero");
+  e.direction.normalize();
+  if (!(e.speed >= 0.0f) || !(e.radius > 0.0f) || !(e.reach >= 0.0f) || !(e.spread >= 0.0f) || !(e.rate >= 0.0f))
+    throw Error(what, "", "speed, reach, spread and rate must be >= 0 and the radius > 0");
+  return e;
+}
+
+std::string plantKeyFor(const std::string& model) {
+  if (model == "lsystem") return "grammar";
+  if (model == "graph") return "graph";
+  return "species";
+}
+
+// A stroke near a full-grown branch particle seeds a branch there, toward the stroke (seed 000
+// §5.1: "the user paints ... new branches sprout"): the closest such particle within the
+// stroke's radius of any of its points.
+void seedBranchNearStroke(Session& s, const env::Stroke& stroke) {
+  particles::ParticleWorld* w = s.particleWorld();
+  if (!w || !stroke.attract) return;
+  uint32_t best = particles::kNone;
+  float bestDistance = stroke.radius;
+  Vec3 toward = Vec3::Zero();
+  for (uint32_t i = 0; i < w->capacity(); ++i) {
+    const uint32_t f = w->flags(i);
+    if (!(f & particles::kActive) || !(f & particles::kGrown) ||
+        (f & (particles::kLeaf | particles::kDetached | particles::kRoot)))
+      continue;
+    for (const Vec3& p : stroke.points) {
+      const float d = (p - w->head(i)).norm();
+      if (d < bestDistance) {
+        bestDistance = d;
+        best = i;
+        toward = p - w->head(i);
+      }
+    }
+  }
+  if (best != particles::kNone) w->seedBranch(best, toward);
+}
+
+void applyTo(Session& s, const Edit& edit, Editor& editor, uint32_t& dragParticle, float& dragStrength) {
+  env::Environment& env = s.environment();
+  std::visit(
+      Overloaded{
+          [&](const SeedPlant& e) {
+            requireFinite(e.position, "seed_plant", "position");
+            requireFinite(e.normal, "seed_plant", "normal");
+            if (e.normal.squaredNorm() == 0.0f) throw Error("seed_plant", "/normal", "must not be zero");
+            Json plant = Json::object();
+            std::string name = e.name;
+            for (size_t n = s.plantCount(); name.empty(); ++n) {
+              std::string candidate = fmt::format("plant{}", n);
+              bool used = false;
+              for (size_t i = 0; i < s.plantCount(); ++i) used |= s.plantSpec(i).name == candidate;
+              if (!used) name = candidate;
+            }
+            plant["name"] = name;
+            plant["model"] = e.model;
+            plant["position"] = vec3Json(e.position);
+            plant["direction"] = vec3Json(e.normal);
+            plant["seed"] = e.seed;
+            if (!e.species.empty()) plant[plantKeyFor(e.model)] = e.species;
+            s.addPlant(plant, "seed_plant");
+          },
+          [&](const SeedBranch& e) {
+            uint32_t wp = 0;
+            particles::ParticleWorld& w = particlePlant(s, e.plant, "seed_branch", &wp);
+            requireParticle(w, wp, e.particle, "seed_branch");
+            requireFinite(e.direction, "seed_branch", "direction");
+            if (w.flags(e.particle) & particles::kLeaf)
+              throw Error("seed_branch", "/particle", fmt::format("particle {} is a leaf", e.particle));
+            if (w.seedBranch(e.particle, e.direction) == particles::kNone)
+              throw Error("seed_branch", "/particle", fmt::format("particle {} cannot carry a branch", e.particle));
+          },
+          [&](const Cut& e) {
+            requirePlant(s, e.plant, "cut");
+            try {
+              s.system(e.plant).cut(s.indexInSystem(e.plant), e.node);
+            } catch (const Error& err) {
+              throw Error("cut", "/node", fmt::format("plant {} (model \"{}\"): {}", e.plant, s.plantSpec(e.plant).model,
+                                                      err.message()));
+            }
+          },
+          [&](const DragBegin& e) {
+            if (editor.dragging()) throw Error("drag_begin", "", "a drag is already under way (end it with drag_end)");
+            uint32_t wp = 0;
+            particles::ParticleWorld& w = particlePlant(s, e.plant, "drag_begin", &wp);
+            requireParticle(w, wp, e.particle, "drag_begin");
+            requireFinite(e.target, "drag_begin", "target");
+            if (!(e.strength >= 0.0f && e.strength <= 1.0f))
+              throw Error("drag_begin", "/strength", fmt::format("must be in [0, 1], got {}", e.strength));
+            w.setDrag(e.particle, e.target, e.strength);
+            dragParticle = e.particle;
+            dragStrength = e.strength;
+          },
+          [&](const DragMove& e) {
+            if (!editor.dragging()) throw Error("drag_move", "", "no drag is under way (start one with drag_begin)");
+            requireFinite(e.target, "drag_move", "target");
+            // The grip is lost when the dragged particle broke off and went.
+            particles::ParticleWorld* w = s.particleWorld();
+            if (w) w->setDrag(dragParticle, e.target, dragStrength);
+          },
+          [&](const DragEnd&) {
+            if (!editor.dragging()) throw Error("drag_end", "", "no drag is under way");
+            if (particles::ParticleWorld* w = s.particleWorld()) w->clearDrag();
+          },
+          [&](const PaintStroke& e) {
+            const env::Stroke& st = e.stroke;
+            if (st.points.empty()) throw Error("paint_stroke", "/points", "a stroke needs at least one point");
+            for (const Vec3& p : st.points) requireFinite(p, "paint_stroke", "points");
+            if (!(st.radius > 0.0f) || !std::isfinite(st.radius))
+              throw Error("paint_stroke", "/radius", "must be a positive number of metres");
+            if (!(st.strength >= 0.0f) || !std::isfinite(st.strength))
+              throw Error("paint_stroke", "/strength", "must be a finite number >= 0");
+            env.addStroke(st);
+            s.environmentChanged();
+            seedBranchNearStroke(s, st);
+          },
+          [&](const MoveObstacle& e) {
+            if (e.obstacle >= env.obstacleCount())
+              throw Error("move_obstacle", "/obstacle",
+                          fmt::format("there is no obstacle {} (the scene has {})", e.obstacle, env.obstacleCount()));
+            RigidTransform t = e.worldFromLocal;
+            requireFinite(t.translation, "move_obstacle", "translation");
+            const float n = t.rotation.norm();
+            if (!(n > 1e-6f) || !std::isfinite(n)) throw Error("move_obstacle", "/rotation", "is not a rotation");
+            t.rotation.normalize();
+            env.setObstacleTransform(e.obstacle, t);
+            s.environmentChanged();
+          },
+          [&](const MoveLight& e) {
+            std::vector<env::Light> lights = env.lights();
+            if (e.light >= lights.size())
+              throw Error("move_light", "/light",
+                          fmt::format("there is no light {} (the scene has {})", e.light, lights.size()));
+            env::Light l = e.value;
+            requireFinite(l.position, "move_light", "position");
+            requireFinite(l.direction, "move_light", "direction");
+            if (l.direction.squaredNorm() == 0.0f) throw Error("move_light", "/direction", "must not be zero");
+            l.direction.normalize();
+            if (l.samples < 1) throw Error("move_light", "/samples", "must be at least 1");
+            lights[e.light] = l;
+            env.setLights(std::move(lights));
+          },
+          [&](const AddEmitter& e) {
+            std::vector<env::WindEmitter> list = env.windField().settings().emitters;
+            list.push_back(checkedEmitter(e.emitter, "add_emitter"));
+            s.setEmitters(std::move(list));
+          },
+          [&](const EditEmitter& e) {
+            std::vector<env::WindEmitter> list = env.windField().settings().emitters;
+            if (e.index >= list.size())
+              throw Error("edit_emitter", "/index",
+                          fmt::format("there is no emitter {} (the scene has {})", e.index, list.size()));
+            list[e.index] = checkedEmitter(e.emitter, "edit_emitter");
+            s.setEmitters(std::move(list));
+          },
+          [&](const RemoveEmitter& e) {
+            std::vector<env::WindEmitter> list = env.windField().settings().emitters;
+            if (e.index >= list.size())
+              throw Error("remove_emitter", "/index",
+                          fmt::format("there is no emitter {} (the scene has {})", e.index, list.size()));
+            list.erase(list.begin() + e.index);
+            s.setEmitters(std::move(list));
+          },
+          [&](const SetSpecies& e) {
+            requirePlant(s, e.plant, "set_species");
+            if (!e.keys.is_object())
+              throw Error("set_species", "/species", "expected an object of species keys, got " + describeJson(e.keys));
+            Json plant = s.plantDescription(e.plant);
+            if (!plant.is_object())
+              throw Error("set_species", "/plant", fmt::format("plant {} was added from code; its species cannot be edited", e.plant));
+            Json species = plant.contains("species") ? plant["species"] : Json::object();
+            if (species.is_string()) species = Json{{"base", species.get<std::string>()}};
+            for (auto it = e.keys.begin(); it != e.keys.end(); ++it) species[it.key()] = it.value();
+            plant["species"] = species;
+            s.setPlantDescription(e.plant, plant, "set_species");
+          },
+          [&](const Step& e) {
+            for (uint32_t i = 0; i < e.count; ++i) s.step();
+          },
+          [&](const Undo&) { editor.undo(); },
+          [&](const Redo&) { editor.redo(); },
+      },
+      edit);
+}
+
+}  // namespace
+
+// --- names and JSON ---
+
+const char* editName(const Edit& edit) {
+  static constexpr const char* kNames[] = {"seed_plant",    "seed_branch",  "cut",         "drag_begin",
+                                           "drag_move",     "drag_end",     "paint_stroke", "move_obstacle",
+                                           "move_light",    "add_emitter",  "edit_emitter", "remove_emitter",
+                                           "set_species",   "step",         "undo",         "redo"};
+  static_assert(std::size(kNames) == std::variant_size_v<Edit>);
+  return kNames[edit.index()];
+}
+
+Json editToJson(const Edit& edit) {
+  Json j = Json::object();
+  j["edit"] = editName(edit);
+  std::visit(Overloaded{
+                 [&](const SeedPlant& e) {
+                   j["model"] = e.model;
+                   if (!e.species.empty()) j["species"] = e.species;
+                   if (!e.name.empty()) j["name"] = e.name;
+                   j["position"] = vec3Json(e.position);
+                   j["normal"] = vec3Json(e.normal);
+                   j["seed"] = e.seed;
+                 },
+                 [&](const SeedBranch& e) {
+                   j["plant"] = e.plant, j["particle"] = e.particle, j["direction"] = vec3Json(e.direction);
+                 },
+                 [&](const Cut& e) { j["plant"] = e.plant, j["node"] = e.node; },
+                 [&](const DragBegin& e) {
+                   j["plant"] = e.plant, j["particle"] = e.particle, j["target"] = vec3Json(e.target);
+                   j["strength"] = e.strength;
+                 },
+                 [&](const DragMove& e) { j["target"] = vec3Json(e.target); },
+                 [&](const DragEnd&) {},
+                 [&](const PaintStroke& e) {
+                   j["attract"] = e.stroke.attract, j["radius"] = e.stroke.radius, j["strength"] = e.stroke.strength;
+                   Json pts = Json::array();
+                   for (const Vec3& p : e.stroke.points) pts.push_back(vec3Json(p));
+                   j["points"] = pts;
+                 },
+                 [&](const MoveObstacle& e) {
+                   const Quat& q = e.worldFromLocal.rotation;
+                   j["obstacle"] = e.obstacle;
+                   j["translation"] = vec3Json(e.worldFromLocal.translation);
+                   j["rotation"] = Json::array({q.w(), q.x(), q.y(), q.z()});
+                 },
+                 [&](const MoveLight& e) {
+                   j["light"] = e.light;
+                   j.update(lightJson(e.value));
+                 },
+                 [&](const AddEmitter& e) { j.update(emitterJson(e.emitter)); },
+                 [&](const EditEmitter& e) {
+                   j["index"] = e.index;
+                   j.update(emitterJson(e.emitter));
+                 },
+                 [&](const RemoveEmitter& e) { j["index"] = e.index; },
+                 [&](const SetSpecies& e) { j["plant"] = e.plant, j["species"] = e.keys; },
+                 [&](const Step& e) { j["count"] = e.count; },
+                 [&](const Undo&) {},
+                 [&](const Redo&) {},
+             },
+             edit);
+  return j;
+}
+
+Edit readEdit(JsonObject& o) {
+  if (!o.has("edit")) throw o.error("edit", "is required: the kind of edit (e.g. \"seed_plant\")");
+  const std::string kind = o.choice("edit", "", {"seed_plant", "seed_branch", "cut", "drag_begin", "drag_move",
+                                                 "drag_end", "paint_stroke", "move_obstacle", "move_light",
+                                                 "add_emitter", "edit_emitter", "remove_emitter", "set_species",
+                                                 "step", "undo", "redo"});
+  if (kind == "seed_plant") {
+    SeedPlant e;
+    e.model = o.string("model", e.model);
+    if (!models::findModelType(e.model)) {
+      std::string names;
+      for (const models::ModelType& t : models::modelTypes()) names += (names.empty() ? "\"" : ", \"") + t.name + "\"";
+      throw o.error("model", fmt::format("must be one of {}, got \"{}\"", names, e.model));
+    }
+    e.species = o.string("species", "");
+    e.name = o.string("name", "");
+    if (!o.has("position")) throw o.error("position", "is required (the seed point, [x, y, z] in m)");
+    e.position = o.vec3("position", e.position);
+    e.normal = readDirection(o, "normal", e.normal);
+    e.seed = o.seed("seed", e.seed);
+    return e;
+  }
+  if (kind == "seed_branch") {
+    SeedBranch e;
+    e.plant = readIndex(o, "plant");
+    e.particle = readIndex(o, "particle");
+    e.direction = readDirection(o, "direction", e.direction);
+    return e;
+  }
+  if (kind == "cut") {
+    Cut e;
+    e.plant = readIndex(o, "plant");
+    e.node = readIndex(o, "node");
+    return e;
+  }
+  if (kind == "drag_begin") {
+    DragBegin e;
+    e.plant = readIndex(o, "plant");
+    e.particle = readIndex(o, "particle");
+    if (!o.has("target")) throw o.error("target", "is required (where the particle is pulled, [x, y, z] in m)");
+    e.target = o.vec3("target", e.target);
+    e.strength = o.numberf("strength", e.strength, 0.0, 1.0);
+    return e;
+  }
+  if (kind == "drag_move") {
+    DragMove e;
+    if (!o.has("target")) throw o.error("target", "is required (where the particle is pulled, [x, y, z] in m)");
+    e.target = o.vec3("target", e.target);
+    return e;
+  }
+  if (kind == "drag_end") return DragEnd{};
+  if (kind == "paint_stroke") {
+    PaintStroke e;
+    e.stroke.attract = o.boolean("attract", true);
+    e.stroke.radius = o.numberf("radius", e.stroke.radius, 1e-4, 1000.0);
+    e.stroke.strength = o.numberf("strength", e.stroke.strength, 0.0, 1e6);
+    const Json* pts = o.find("points");
+    if (!pts || !pts->is_array() || pts->empty())
+      throw o.error("points", "is required: a non-empty array of [x, y, z] points");
+    for (size_t i = 0; i < pts->size(); ++i) {
+      const Json& p = (*pts)[i];
+      const std::string ptr = o.pointerTo("points") + "/" + std::to_string(i);
+      if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number())
+        throw Error(o.source(), ptr, "expected [x, y, z], got " + describeJson(p));
+      Vec3 v(p[0].get<float>(), p[1].get<float>(), p[2].get<float>());
+      if (!isFinite(v)) throw Error(o.source(), ptr, "point is not finite");
+      e.stroke.points.push_back(v);
+    }
+    return e;
+  }
+  if (kind == "move_obstacle") {
+    MoveObstacle e;
+    e.obstacle = readIndex(o, "obstacle");
+    e.worldFromLocal.translation = o.vec3("translation", Vec3::Zero());
+    if (const Json* r = o.find("rotation")) {
+      if (!r->is_array() || r->size() != 4 || !(*r)[0].is_number() || !(*r)[1].is_number() || !(*r)[2].is_number() ||
+          !(*r)[3].is_number())
+        throw o.error("rotation", "expected a quaternion [w, x, y, z], got " + describeJson(*r));
+      Quat q((*r)[0].get<float>(), (*r)[1].get<float>(), (*r)[2].get<float>(), (*r)[3].get<float>());
+      if (!(std::abs(q.norm() - 1.0f) < 1e-3f)) throw o.error("rotation", "is not a unit quaternion [w, x, y, z]");
+      e.worldFromLocal.rotation = q;
+    }
+    return e;
+  }
+  if (kind == "move_light") {
+    MoveLight e;
+    e.light = readIndex(o, "light");
+    e.value = readLight(o);
+    return e;
+  }
+  if (kind == "add_emitter") return AddEmitter{readEmitter(o)};
+  if (kind == "edit_emitter") {
+    EditEmitter e;
+    e.index = readIndex(o, "index");
+    e.emitter = readEmitter(o);
+    return e;
+  }
+  if (kind == "remove_emitter") return RemoveEmitter{readIndex(o, "index")};
+  if (kind == "set_species") {
+    SetSpecies e;
+    e.plant = readIndex(o, "plant");
+    const Json* sp = o.find("species");
+    if (!sp || !sp->is_object()) throw o.error("species", "is required: an object of species keys");
+    e.keys = *sp;
+    return e;
+  }
+  if (kind == "step") return Step{uint32_t(o.integer("count", 1, 1, 10'000'000))};
+  if (kind == "undo") return Undo{};
+  return Redo{};
+}
+
+// --- the editor ---
+
+struct Editor::Snapshot {
+  std::vector<uint8_t> state;
+  bool dragging = false;
+  uint32_t dragParticle = kNoParticle;
+  float dragStrength = 0.0f;
+};
+
+Editor::Editor(Session& session, size_t historyBytes) : session_(session), historyBytesCap_(historyBytes) {}
+Editor::~Editor() = default;
+
+bool Editor::canUndo() const { return !undo_.empty(); }
+bool Editor::canRedo() const { return !redo_.empty(); }
+size_t Editor::undoDepth() const { return undo_.size(); }
+size_t Editor::redoDepth() const { return redo_.size(); }
+
+size_t Editor::historyBytes() const {
+  size_t n = 0;
+  for (const Snapshot& s : undo_) n += s.state.size();
+  for (const Snapshot& s : redo_) n += s.state.size();
+  return n;
+}
+
+void Editor::trim() {
+  // The oldest undo steps go first, then the farthest redo steps.
+  size_t total = historyBytes();
+  while (total > historyBytesCap_ && !undo_.empty()) {
+    total -= undo_.front().state.size();
+    undo_.erase(undo_.begin());
+  }
+  while (total > historyBytesCap_ && !redo_.empty()) {
+    total -= redo_.front().state.size();
+    redo_.erase(redo_.begin());
+  }
+}
+
+void Editor::setJournal(std::vector<TimedEdit> journal) {
+  journal_ = std::move(journal);
+  stepsRun_ = 0;
+  if (!journal_.empty()) {
+    const TimedEdit& last = journal_.back();
+    const Step* s = std::get_if<Step>(&last.edit);
+    stepsRun_ = last.atStep + (s ? s->count : 0);
+  }
+}
+
+void Editor::record(uint32_t at, const Edit& edit) {
+  if (const Step* s = std::get_if<Step>(&edit)) {
+    if (!journal_.empty())
+      if (Step* last = std::get_if<Step>(&journal_.back().edit); last && journal_.back().atStep + last->count == at) {
+        last->count += s->count;
+        return;
+      }
+  }
+  journal_.push_back({at, edit});
+}
+
+void Editor::undo() {
+  if (undo_.empty()) throw Error("undo", "", "there is nothing to undo");
+  Snapshot now{session_.saveState(), dragging_, dragParticle_, dragStrength_};
+  Snapshot& before = undo_.back();
+  session_.loadState(before.state, "undo history");
+  dragging_ = before.dragging, dragParticle_ = before.dragParticle, dragStrength_ = before.dragStrength;
+  undo_.pop_back();
+  redo_.push_back(std::move(now));
+  trim();
+}
+
+void Editor::redo() {
+  if (redo_.empty()) throw Error("redo", "", "there is nothing to redo");
+  Snapshot now{session_.saveState(), dragging_, dragParticle_, dragStrength_};
+  Snapshot& after = redo_.back();
+  session_.loadState(after.state, "undo history");
+  dragging_ = after.dragging, dragParticle_ = after.dragParticle, dragStrength_ = after.dragStrength;
+  redo_.pop_back();
+  undo_.push_back(std::move(now));
+  trim();
+}
+
+void Editor::step(uint32_t count) { apply(Step{count}); }
+
+void Editor::apply(const Edit& edit) {
+  const uint32_t at = stepsRun_;
+  if (std::holds_alternative<Undo>(edit) || std::holds_alternative<Redo>(edit)) {
+    applyTo(session_, edit, *this, dragParticle_, dragStrength_);
+    record(at, edit);
+    return;
+  }
+  if (const Step* s = std::get_if<Step>(&edit)) {
+    // Steps are not undo entries of their own; they change the state a redo would restore
+    // onto, so the redo steps go.
+    applyTo(session_, edit, *this, dragParticle_, dragStrength_);
+    stepsRun_ += s->count;
+    if (s->count > 0) redo_.clear();
+    record(at, edit);
+    return;
+  }
+  // A drag gesture is one undo entry: the one made by drag_begin.
+  const bool gesture = std::holds_alternative<DragMove>(edit) || std::holds_alternative<DragEnd>(edit);
+  Snapshot before{session_.saveState(), dragging_, dragParticle_, dragStrength_};
+  try {
+    applyTo(session_, edit, *this, dragParticle_, dragStrength_);
+  } catch (const Error&) {
+    session_.loadState(before.state, "undo history");
+    dragging_ = before.dragging, dragParticle_ = before.dragParticle, dragStrength_ = before.dragStrength;
+    throw;
+  }
+  if (std::holds_alternative<DragBegin>(edit)) dragging_ = true;
+  if (std::holds_alternative<DragEnd>(edit)) dragging_ = false;
+  if (!gesture) {
+    undo_.push_back(std::move(before));
+    redo_.clear();
+    trim();
+  }
+  record(at, edit);
+}
+
+// --- picking ---
+
+namespace {
+
+// Closest points of the ray o + t d (t >= 0, d unit) and the segment a-b: the ray parameter t,
+// the segment point and their distance.
+float raySegment(const Vec3& o, const Vec3& d, const Vec3& a, const Vec3& b, float* t, Vec3* onSegment) {
+  const Vec3 ab = b - a, ao = a - o;
+  const float len2 = ab.squaredNorm();
+  float s = 0.0f;
+  if (len2 > 1e-12f) {
+    const float dd = d.dot(ab);
+    const float denom = len2 - dd * dd;  // |d| = 1
+    if (denom > 1e-12f) s = std::clamp((dd * d.dot(ao) - ao.dot(ab)) / denom, 0.0f, 1.0f);
+  }
+  Vec3 p = a + s * ab;
+  float tt = std::max(0.0f, d.dot(p - o));
+  // One refinement from the ray point back to the segment handles the clamped cases.
+  if (len2 > 1e-12f) {
+    s = std::clamp((o + tt * d - a).dot(ab) / len2, 0.0f, 1.0f);
+    p = a + s * ab;
+    tt = std::max(0.0f, d.dot(p - o));
+  }
+  *t = tt;
+  *onSegment = p;
+  return (o + tt * d - p).norm();
+}
+
+}  // namespace
+
+std::optional<NodePick> pickNode(const Session& session, const Vec3& origin, const Vec3& dir, float tolerance,
+                                 float maxDistance) {
+  if (!(dir.squaredNorm() > 0.0f) || !isFinite(origin) || !isFinite(dir)) return std::nullopt;
+  const Vec3 d = dir.normalized();
+  std::optional<NodePick> best;
+  const std::vector<plant::PlantModel> plants = session.plants();
+  for (size_t pi = 0; pi < plants.size(); ++pi) {
+    const plant::PlantModel& m = plants[pi];
+    for (size_t n = 0; n < m.nodeCount(); ++n) {
+      float t = 0.0f;
+      Vec3 point;
+      const float dist = raySegment(origin, d, m.position[n], m.tip(n), &t, &point);
+      if (dist > std::max(m.radius[n], tolerance) || t > maxDistance) continue;
+      if (best && !(t < best->t)) continue;
+      best = NodePick{uint32_t(pi), uint32_t(n), kNoParticle, point, t};
+    }
+  }
+  if (best && session.plantSpec(best->plant).model == "particles") {
+    const std::vector<uint32_t> ids =
+        session.particleWorld()->snapshotParticles(uint32_t(session.indexInSystem(best->plant)));
+    if (best->node < ids.size()) best->particle = ids[best->node];
+  }
+  return best;
+}
+
+std::optional<env::RayHit> pickSurface(const Session& session, const Vec3& origin, const Vec3& dir,
+                                       float maxDistance) {
+  if (!(dir.squaredNorm() > 0.0f) || !isFinite(origin) || !isFinite(dir)) return std::nullopt;
+  return session.environment().rayCast(origin, dir.normalized(), maxDistance);
+}
+
+}  // namespace tendril::session
