@@ -251,7 +251,7 @@ void Studio::Impl::drawSceneTree() {
   ImGui::SetNextItemOpen(true, ImGuiCond_Once);
   if (ImGui::TreeNode("Plants")) {
     const auto& plants = view.plants();
-    for (uint32_t p = 0; p < plants.size(); ++p)
+    for (uint32_t p = 0; p < std::min(plants.size(), session->plantCount()); ++p)
       item(Selection::Kind::Plant, p,
            fmt::format("{} [{}] {} seg##p{}", plants[p].name, session->plantSpec(p).model, plants[p].nodeCount(), p));
     ImGui::TreePop();

@@ -120,6 +120,10 @@ bool Studio::Impl::apply(const session::Edit& edit) {
     status = e.what();
     statusIsError = true;
     return false;
+  } catch (const std::exception& e) {
+    status = fmt::format("{}: {}", session::editName(edit), e.what());
+    statusIsError = true;
+    return false;
   }
 }
 
@@ -298,7 +302,8 @@ void Studio::Impl::beginGesture(const Vec2& pixel) {
       }
       if (tool == Tool::BranchSeed) {
         // Sideways from the segment, toward the viewer, leaning forward along it.
-        const plant::PlantModel& m = view.plants().at(node->plant);
+        if (node->plant >= view.plants().size() || node->node >= view.plants()[node->plant].nodeCount()) return;
+        const plant::PlantModel& m = view.plants()[node->plant];
         Vec3 axis = m.orientation[node->node] * Vec3::UnitY();
         Vec3 side = -ray.direction - axis * axis.dot(-ray.direction);
         if (side.squaredNorm() < 1e-8f) side = m.orientation[node->node] * Vec3::UnitZ();
@@ -458,7 +463,7 @@ void Studio::Impl::updateStress() {
   const uint32_t plant = *dragPlant;
   const auto& plants = view.plants();
   const particles::ParticleWorld* world = session->particleWorld();
-  if (plant >= plants.size() || !world) return;
+  if (plant >= plants.size() || plant >= session->plantCount() || !world) return;
   const plant::PlantModel& m = plants[plant];
   const uint32_t worldPlant = uint32_t(session->indexInSystem(plant));
   const particles::ParticleSpecies& species = world->species(worldPlant);
@@ -545,15 +550,16 @@ int Studio::Impl::run() {
     else timing.simulation = 0.0;
     if (headless) --framesLeft;
 
+    // Input first, so that the panels below see the session as the viewport draws it.
+    layout();
+    handleKeys();
+    handleViewportInput();
     Timer updateTimer;
     view.update(*session, selection, meshesChanged);
     meshesChanged = false;
     updateStress();
     view.applyStress();
     const double sceneMs = updateTimer.milliseconds();
-    layout();
-    handleKeys();
-    handleViewportInput();
     drawUi();
 
     Timer drawTimer;
