@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <charconv>
+#include <filesystem>
 
 namespace tendril::studio {
 namespace {
@@ -46,6 +47,11 @@ StudioOptions parseOptions(const std::vector<std::string>& args) {
       o.screenshot = value();
     } else if (a == "--save-session") {
       o.saveSession = value();
+    } else if (a == "--export") {
+      o.exportPath = value();
+      std::string ext = std::filesystem::path(o.exportPath).extension().string();
+      if (ext != ".glb" && ext != ".obj")
+        throw Error("command line", a, fmt::format("expected a .glb or .obj file (got \"{}\")", o.exportPath));
     } else if (a == "--size") {
       parseSize(value(), o);
     } else if (a == "--select") {
@@ -77,6 +83,8 @@ StudioOptions parseOptions(const std::vector<std::string>& args) {
     throw Error("command line", "--screenshot", "--frames needs --screenshot OUT.png (the headless run writes it)");
   if (!o.screenshot.empty() && o.frames < 0)
     throw Error("command line", "--frames", "--screenshot needs --frames N (how many frames to run first)");
+  if (!o.exportPath.empty() && o.frames < 0)
+    throw Error("command line", "--export", "--export needs --frames N (headless runs export when done)");
   if (!o.saveSession.empty() && o.frames < 0)
     throw Error("command line", "--save-session", "--save-session needs --frames N (headless runs save when done)");
   if (!o.screenshot.empty() && (o.screenshot.size() < 4 || o.screenshot.substr(o.screenshot.size() - 4) != ".png"))
@@ -92,6 +100,7 @@ std::string usage() {
          "  --frames N             headless: run N frames, write --screenshot and exit\n"
          "  --screenshot OUT.png   headless: the whole window, UI included, after the last frame\n"
          "  --save-session F.tses headless: also save the session after the last frame\n"
+         "  --export OUT.glb|.obj  headless: also export the plants after the last frame\n"
          "  --size WxH             window size in pixels (default 1600x900)\n"
          "  --speed K              growth steps per frame while playing (default 1)\n"
          "  --paused               start with the timeline paused (interactive runs)\n"

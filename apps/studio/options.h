@@ -16,6 +16,7 @@ struct StudioOptions {
   int64_t frames = -1;     // headless: frames to run before the screenshot (-1 = interactive)
   std::string screenshot;  // headless: PNG written after the last frame
   std::string saveSession; // headless: session file written after the last frame
+  std::string exportPath;  // headless: plants exported (.glb or .obj) after the last frame
   int width = 1600;        // window size (pixels)
   int height = 900;
   std::string select;      // "plant:0", "obstacle:1", ...: selected at the start (screenshots)

@@ -576,6 +576,7 @@ int Studio::Impl::run() {
     if (lastFrame) {
       io::writePng(window.readBackBuffer(), options.screenshot);
       if (!options.saveSession.empty()) saveFile(options.saveSession);
+      if (!options.exportPath.empty()) exportFile(options.exportPath);
     }
     window.swap();
     timing.frame = frameTimer.milliseconds();

@@ -93,6 +93,7 @@ TEST(StudioCommandLine, BadArgumentsExitTwoNamingTheArgument) {
       {"--bogus", "--bogus"},
       {"a.json b.json", "b.json"},
       {"--script", "--script"},
+      {"--frames 1 --screenshot x.png --export x.fbx", "--export"},
   };
   for (const auto& [args, named] : cases) {
     std::string out, err;
@@ -160,13 +161,17 @@ TEST(StudioHeadless, SavedSessionReopensWhereItStopped) {
   ASSERT_EQ(runStudio(dir,
                       quoted(kTestDir / "wall.json") + " --script " + quoted(kTestDir / "sculpt-nocut.json") +
                           " --frames 30 --speed 4 --size 800x600 --screenshot " + quoted(dir / "a.png") +
-                          " --save-session " + quoted(saved),
+                          " --save-session " + quoted(saved) + " --export " + quoted(dir / "plants.glb"),
                       true, &out, &err),
             0)
       << err;
   const long before = reportedSegments(err);
   ASSERT_GT(before, 0) << err;
   ASSERT_TRUE(fs::exists(saved));
+  // File > Export writes the plants with the CLI's exporter: a binary glTF.
+  ASSERT_TRUE(fs::exists(dir / "plants.glb"));
+  EXPECT_EQ(readText(dir / "plants.glb").substr(0, 4), "glTF");
+  EXPECT_GT(fs::file_size(dir / "plants.glb"), 10000u);
   ASSERT_EQ(runStudio(dir, quoted(saved) + " --frames 0 --size 800x600 --screenshot " + quoted(dir / "b.png"), true,
                       &out, &err),
             0)
