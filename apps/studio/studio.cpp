@@ -81,6 +81,10 @@ void Studio::Impl::openFile(const std::filesystem::path& path) {
   currentPath = path;
   selection = {};
   gesture = {};
+  dragPlant.reset();
+  strainAtDragStart.clear();
+  script.reset();  // a script replays on the session it was started with
+  nextScriptEdit = 0;
   lsystemPanel.close();
   meshesChanged = true;
   cameraFramed = false;
@@ -314,7 +318,6 @@ void Studio::Impl::beginGesture(const Vec2& pixel) {
       if (apply(session::DragBegin{node->plant, node->particle, node->point, dragStrength})) {
         dragPlant = node->plant;
         gesture.active = true;
-        gesture.plant = node->plant;
         gesture.anchor = node->point;
       }
       return;

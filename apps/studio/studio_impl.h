@@ -22,8 +22,8 @@ struct Gesture {
   Tool tool = Tool::View;
   Vec2 start = Vec2::Zero();
   Vec2 last = Vec2::Zero();
-  // Drag: the particle's plant; paint: the stroke so far; move obstacle / light: the preview.
-  uint32_t plant = 0;
+  // Drag and move obstacle: the grabbed point; paint: the stroke so far; move obstacle / light:
+  // the preview.
   Vec3 anchor = Vec3::Zero();
   env::Stroke stroke;
   uint32_t obstacle = 0;
