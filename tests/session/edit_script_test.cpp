@@ -116,8 +116,8 @@ TEST(EditScript, EveryEditReplaysTheSameForAnyThreadCount) {
 }
 
 TEST(EditScript, ExampleScriptRunsOnTheDefaultScene) {
-  const EditScript script = loadEditScript(test::sourceDir() / "examples/edits/particles-sculpt.json");
-  auto s = Session::open(test::sourceDir() / "examples/scenes/particles-sculpt.json");
+  const EditScript script = loadEditScript(test::sourceDir() / "examples/edits/edit-stage.json");
+  auto s = Session::open(test::sourceDir() / "examples/scenes/edit-stage.json");
   Editor editor(*s);
   runEditScript(editor, script);
   EXPECT_GE(s->plantCount(), 2u);
@@ -132,7 +132,7 @@ void expectOneLineError(const test::CommandResult& r, const std::string& prefix)
 
 TEST(EditCli, BadArgumentsAreOneLineErrors) {
   auto dir = test::scratchDir();
-  const std::string scene = test::quoted(test::sourceDir() / "examples/scenes/particles-sculpt.json");
+  const std::string scene = test::quoted(test::sourceDir() / "examples/scenes/edit-stage.json");
   expectOneLineError(test::runTendril("edit " + scene + " -o " + test::quoted(dir / "out"), dir),
                      "tendril: error: command line: --script is required");
   expectOneLineError(test::runTendril("edit " + scene + " --script " + test::quoted(dir / "none.json") + " -o " +
@@ -154,8 +154,8 @@ TEST(EditCli, BadArgumentsAreOneLineErrors) {
 
 TEST(EditCli, EditsSavesAndContinuesASession) {
   auto dir = test::scratchDir();
-  const std::string scene = test::quoted(test::sourceDir() / "examples/scenes/particles-sculpt.json");
-  const std::string script = test::quoted(test::sourceDir() / "examples/edits/particles-sculpt.json");
+  const std::string scene = test::quoted(test::sourceDir() / "examples/scenes/edit-stage.json");
+  const std::string script = test::quoted(test::sourceDir() / "examples/edits/edit-stage.json");
   auto first = test::runTendril("edit " + scene + " --script " + script + " --steps 60 -o " +
                                     test::quoted(dir / "a") + " --save " + test::quoted(dir / "a.tses") + " -q",
                                 dir);
@@ -171,7 +171,7 @@ TEST(EditCli, EditsSavesAndContinuesASession) {
   LoadedSession b = loadSession(dir / "b.tses");
   EXPECT_EQ(b.session->stepCount(), 71u);
   // The whole journal replays from the scene to the same state.
-  auto replayed = Session::open(test::sourceDir() / "examples/scenes/particles-sculpt.json");
+  auto replayed = Session::open(test::sourceDir() / "examples/scenes/edit-stage.json");
   Editor editor(*replayed);
   runEditScript(editor, EditScript{"journal", b.journal});
   EXPECT_EQ(replayed->stateHash(), b.session->stateHash());
