@@ -179,3 +179,38 @@ TEST(EditCli, EditsSavesAndContinuesASession) {
 
 }  // namespace
 }  // namespace tendril
+
+namespace tendril {
+namespace {
+
+TEST(EditCli, PreviewAndRenderOfASessionFile) {
+  auto dir = test::scratchDir();
+  const std::string scene = test::quoted(test::sourceDir() / "examples/scenes/edit-stage.json");
+  const std::string script = test::quoted(test::sourceDir() / "examples/edits/edit-stage.json");
+  auto edit = test::runTendril("edit " + scene + " --script " + script + " --steps 60 -o " + test::quoted(dir / "a") +
+                                   " --save " + test::quoted(dir / "a.tses") + " --preview " +
+                                   test::quoted(dir / "preview.png") + " -q",
+                               dir);
+  ASSERT_EQ(edit.exitCode, 0) << edit.err;
+  EXPECT_GT(std::filesystem::file_size(dir / "preview.png"), 2000u);
+  auto render = test::runTendril("render " + test::quoted(dir / "a.tses") + " -o " + test::quoted(dir / "r.png") +
+                                     " --width 320 --height 180 -q",
+                                 dir);
+  ASSERT_EQ(render.exitCode, 0) << render.err;
+  EXPECT_GT(std::filesystem::file_size(dir / "r.png"), 2000u);
+  // A session keeps its seed; a damaged one is a one-line error naming it.
+  auto seeded = test::runTendril("render " + test::quoted(dir / "a.tses") + " -o " + test::quoted(dir / "s.png") +
+                                     " --seed 3",
+                                 dir);
+  EXPECT_EQ(seeded.exitCode, 2);
+  std::string bytes = test::readText(dir / "a.tses");
+  test::writeText(dir / "cut.tses", bytes.substr(0, bytes.size() / 2));
+  auto damaged = test::runTendril("render " + test::quoted(dir / "cut.tses") + " -o " + test::quoted(dir / "d.png"), dir);
+  EXPECT_EQ(damaged.exitCode, 2);
+  EXPECT_EQ(damaged.err.rfind("tendril: error: " + (dir / "cut.tses").string() + ":byte ", 0), 0u) << damaged.err;
+  EXPECT_EQ(std::count(damaged.err.begin(), damaged.err.end(), '\n'), 1) << damaged.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "d.png"));
+}
+
+}  // namespace
+}  // namespace tendril
