@@ -51,7 +51,8 @@ constexpr float kVisc = 45.0f / kPi;
 // per metre moved.
 constexpr float kSdfLipschitz = 1.75f;
 
-// Four floats or ints (GCC/Clang vector extensions: SSE on x86-64, NEON on ARM).
+// Four floats or ints: GCC (12 or later, for __builtin_shufflevector) and Clang vector
+// extensions, SSE on x86-64 and NEON on ARM.
 using V4f = float __attribute__((vector_size(16)));
 using V4i = int32_t __attribute__((vector_size(16)));
 constexpr V4i kLanes = {0, 1, 2, 3};
