@@ -30,6 +30,7 @@ struct GrowOptions {
   int64_t seed = -1;
   int64_t every = 0;
   double windAnimation = -1.0;  // seconds; < 0: the scene's output.wind_animation
+  bool windFrames = false;      // also every frame of the clip as its own .glb
   std::string formats = "glb,obj";
   CommonOptions common;
 };
@@ -40,6 +41,9 @@ int runGrow(const GrowOptions& o) {
   scene::Scene scene = scene::loadScene(o.scene);
   if (o.steps >= 0) scene.steps = static_cast<int>(o.steps);
   if (o.seed >= 0) scene.seed = static_cast<uint64_t>(o.seed);
+  if (o.windFrames && !((o.windAnimation >= 0.0 ? float(o.windAnimation) : scene.output.animationSeconds) > 0.0f))
+    throw Error("command line", "--wind-frames",
+                "needs a wind clip: --wind-animation SECONDS or the scene's output.wind_animation");
   std::filesystem::path outDir = prepareOutputDir(o.outDir);
 
   Timer total;
@@ -91,6 +95,10 @@ int runGrow(const GrowOptions& o) {
     std::filesystem::path file = outDir / "plant-wind.glb";
     io::writeWindAnimationGlb(animated, session.environment().windField(), a, file);
     written.push_back(file.string());
+    // The per-step sequence: the same motion frame by frame, leaves moving on their own.
+    if (o.windFrames)
+      for (std::filesystem::path& f : io::writeWindFrames(animated, session.environment().windField(), a, outDir, "plant-wind"))
+        written.push_back(f.string());
   }
 
   if (!o.common.quiet) {
@@ -126,6 +134,9 @@ RegisterCommand registerGrow("grow", "Grow every plant of a scene and write the 
                  "Also write plant-wind.glb: a looping clip of this many seconds of the plants moving in the "
                  "scene's wind (overrides output.wind_animation; 0 = none)")
       ->check(CLI::Range(0.0, 600.0));
+  sub.add_flag("--wind-frames", o->windFrames,
+               "Also write every frame of the wind clip as plant-wind_0000.glb, ... (leaves bend, twist and "
+               "vibrate on their own, which the looping clip cannot carry)");
   sub.add_option("--format", o->formats, "Comma-separated output formats: glb, obj")->capture_default_str();
   addCommonOptions(sub, o->common);
   return [o] { return runGrow(*o); };
