@@ -100,13 +100,13 @@ void checkRange(const char* key, float v, float lo, float hi, const char* unit) 
 
 }  // namespace
 
-// A uniform grid over the domain, cells of edge h/2 (h when that would be too many cells),
-// rebuilt by counting sort after every substep, and the particles' state copied into grid
+// A uniform grid over the domain, cells of h/8 along x and h/2 across (h/2 or h when that
+// would be too many cells), rebuilt by counting sort after every substep, and the particles' state copied into grid
 // order (structure of arrays), so that a particle's neighbours lie in contiguous runs (one per
 // row of x-adjacent cells), each run clipped to the sphere of radius h around it.
 struct SphAir::Grid {
   Vec3 origin = Vec3::Zero();
-  float edge = 1.0f, inv = 1.0f;  // cell edge, 1 / cell edge
+  Vec3 edge = Vec3::Ones(), inv = Vec3::Ones();  // cell edges, their inverses
   Eigen::Vector3i dims = Eigen::Vector3i::Ones();
   std::vector<uint32_t> cellOf;  // per particle (kDead: not in the grid)
   std::vector<uint32_t> start;   // per cell + 1
@@ -128,7 +128,7 @@ struct SphAir::Grid {
   std::vector<uint32_t> nbrBegin, nbrCount, hitBegin, hitCount;
 
   size_t size() const { return order.size(); }
-  int cellAxis(float v, int k) const { return std::clamp(int(std::floor((v - origin[k]) * inv)), 0, dims[k] - 1); }
+  int cellAxis(float v, int k) const { return std::clamp(int(std::floor((v - origin[k]) * inv[k])), 0, dims[k] - 1); }
   Eigen::Vector3i cellCoord(const Vec3& p) const {
     return Eigen::Vector3i(cellAxis(p.x(), 0), cellAxis(p.y(), 1), cellAxis(p.z(), 2));
   }
@@ -145,16 +145,16 @@ struct SphAir::Grid {
   // The gap between v and the slab of cell c along axis k (0 inside it); the outermost cells
   // reach to infinity, as particles outside the domain are binned into them.
   float gap(float v, int k, int c) const {
-    const float lo = origin[k] + float(c) * edge;
+    const float lo = origin[k] + float(c) * edge[k];
     if (c > 0 && v < lo) return lo - v;
-    if (c < dims[k] - 1 && v > lo + edge) return v - (lo + edge);
+    if (c < dims[k] - 1 && v > lo + edge[k]) return v - (lo + edge[k]);
     return 0.0f;
   }
   // Calls f(begin, end) for runs holding every particle closer than r to (x, y, z): the rows of
   // cells the sphere meets, each clipped to the cells along x the sphere meets.
   template <class F>
   void forSphereRuns(float x, float y, float z, float r, F&& f) const {
-    constexpr int kMax = 8;  // r ≤ 2 (1 + 1e-5) cell edges: at most 6 cells per axis
+    constexpr int kMax = 20;  // 2r ≤ 16 (1 + 1e-5) cell edges: at most 18 cells per axis
     const float r2 = r * r;
     int lo[3], n[3];
     float g2[3][kMax];
@@ -185,9 +185,10 @@ struct SphAir::Grid {
 };
 
 // Grown branch particles of the plants that can reach the air, in the order of their cells,
-// with what the coupling needs, and binned for the air: every cell of the air's grid lists the
-// plant particles whose support's bounding box meets it (built once per frame: the plants do
-// not move within a frame), so an air particle's candidates are its own cell's list.
+// with what the coupling needs, and binned for the air: every bin (a cubic cell of h/2 over the
+// domain) lists the plant particles whose support's bounding box meets it (built once per
+// frame: the plants do not move within a frame), so an air particle's candidates are its own
+// bin's list.
 struct SphAir::Plants {
   std::vector<uint32_t> slot;  // particle id in the ParticleWorld
   std::vector<Vec3> x, axis, v;
@@ -199,8 +200,19 @@ struct SphAir::Plants {
   std::vector<Vec3> extent;         // half-extents of the support's bounding box
   // The same packed for 4-wide gathers: (x, 1/α²), (axis, 1/β²), (v, k/max(Z, ½)), (det G, Ψ, 0, 0).
   std::vector<V4f> packX, packAxis, packV, packG;
-  std::vector<uint32_t> start;      // per air-grid cell + 1
-  std::vector<uint32_t> entries;    // plant indices per cell
+  // Bins over the domain (cubic cells; the outermost reach to infinity).
+  Vec3 origin = Vec3::Zero();
+  float edge = 1.0f, inv = 1.0f;
+  Eigen::Vector3i dims = Eigen::Vector3i::Ones();
+  std::vector<uint32_t> start;      // per bin + 1
+  std::vector<uint32_t> entries;    // plant indices per bin
+
+  uint32_t binOf(const Vec3& p) const {
+    int c[3];
+    for (int k = 0; k < 3; ++k) c[k] = std::clamp(int(std::floor((p[k] - origin[k]) * inv)), 0, dims[k] - 1);
+    return binIndex(c[0], c[1], c[2]);
+  }
+  uint32_t binIndex(int x, int y, int z) const { return uint32_t((size_t(z) * dims.y() + y) * dims.x() + x); }
 
   size_t size() const { return slot.size(); }
   void clear() {
@@ -366,31 +378,40 @@ SphAir::SphAir(const SphSettings& settings) : settings_(settings) {
       w.edgeGradient[size_t(t1) * Walls::kEdgeSamples + t2] = float(mass_ * grad);
     }
 
-  // The grid over the domain: cells of edge h/2, whose runs clipped to the sphere of radius h
-  // hold 2.5 candidates per neighbour (27 cells of edge h: 6.4), or of edge h in huge domains.
+  // The grid over the domain: cells of h/8 along x and h/2 across, whose runs clipped to the
+  // sphere of radius h hold about 2.2 candidates per neighbour (27 cells of edge h: 6.4); or
+  // cells of h/2, or h, where that would be too many cells.
   Grid& g = *grid_;
   g.origin = settings_.domainMin;
-  auto cellsOf = [&](float edge, Eigen::Vector3i* dims) {
+  auto cellsOf = [&](const Vec3& edge, Eigen::Vector3i* dims) {
     size_t cells = 1;
     for (int k = 0; k < 3; ++k) {
-      (*dims)[k] = std::max(1, int(std::ceil((settings_.domainMax[k] - settings_.domainMin[k]) / edge)));
+      (*dims)[k] = std::max(1, int(std::ceil((settings_.domainMax[k] - settings_.domainMin[k]) / edge[k])));
       cells *= size_t((*dims)[k]);
     }
     return cells;
   };
-  size_t cells = cellsOf(h_, &g.dims);
+  size_t cells = cellsOf(Vec3::Constant(h_), &g.dims);
   if (cells > kMaxCells)
     throw settingError("domain", fmt::format("the domain holds {} cells of the kernel support h = {} m (at most {}): "
                                              "shrink the domain or raise the spacing",
                                              cells, h_, kMaxCells));
-  g.edge = h_;
-  Eigen::Vector3i fine;
-  if (const size_t fineCells = cellsOf(0.5f * h_, &fine); fineCells <= kMaxCells) {
-    g.edge = 0.5f * h_;
-    g.dims = fine;
-    cells = fineCells;
+  g.edge = Vec3::Constant(h_);
+  for (const Vec3& edge : {Vec3(0.125f * h_, 0.5f * h_, 0.5f * h_), Vec3(0.5f * h_, 0.5f * h_, 0.5f * h_)}) {
+    Eigen::Vector3i dims;
+    if (const size_t n = cellsOf(edge, &dims); n <= kMaxCells) {
+      g.edge = edge, g.dims = dims, cells = n;
+      break;
+    }
   }
-  g.inv = 1.0f / g.edge;
+  g.inv = g.edge.cwiseInverse();
+  // The plants' bins: cubic cells of h/2 (or h).
+  Plants& P = *plants_;
+  P.origin = settings_.domainMin;
+  P.edge = h_;
+  if (Eigen::Vector3i dims; cellsOf(Vec3::Constant(0.5f * h_), &dims) <= kMaxCells) P.edge = 0.5f * h_;
+  P.inv = 1.0f / P.edge;
+  cellsOf(Vec3::Constant(P.edge), &P.dims);
   g.start.assign(cells + 1, 0);
 }
 
@@ -614,11 +635,10 @@ void SphAir::querySdf(const env::Environment& env, size_t i) {
   }
 }
 
-// The plants' grown branch particles that can reach the domain, in the order of the air
-// grid's cells, and each listed in the cells its support's bounding box meets.
+// The plants' grown branch particles that can reach the domain, in the order of their bins,
+// and each listed in the bins its support's bounding box meets.
 void SphAir::collectPlants(const particles::ParticleWorld& world) {
   Plants& P = *plants_;
-  const Grid& g = *grid_;
   P.clear();
   std::vector<uint32_t> found;
   const Vec3 lo = settings_.domainMin, hi = settings_.domainMax;
@@ -631,11 +651,10 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
     found.push_back(i);
   }
   // Counting sort by the cell of the centre, stable in particle id.
-  const size_t n = found.size(), cells = g.start.size() - 1;
+  const size_t n = found.size(), cells = size_t(P.dims.x()) * P.dims.y() * P.dims.z();
   std::vector<uint32_t> cellOf(n), first(cells + 1, 0);
   for (size_t k = 0; k < n; ++k) {
-    const Eigen::Vector3i c = g.cellCoord(world.position(found[k]));
-    cellOf[k] = g.cellIndex(c.x(), c.y(), c.z());
+    cellOf[k] = P.binOf(world.position(found[k]));
     ++first[cellOf[k] + 1];
   }
   for (size_t c = 1; c < first.size(); ++c) first[c] += first[c - 1];
@@ -670,10 +689,14 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
   // outermost cells reach to infinity).
   P.start.assign(cells + 1, 0);
   auto forCells = [&](uint32_t j, auto&& f) {
-    const Eigen::Vector3i c0 = g.cellCoord(P.x[j] - P.extent[j]), c1 = g.cellCoord(P.x[j] + P.extent[j]);
-    for (int z = c0.z(); z <= c1.z(); ++z)
-      for (int y = c0.y(); y <= c1.y(); ++y)
-        for (int x = c0.x(), c = int(g.cellIndex(x, y, z)); x <= c1.x(); ++x, ++c) f(c);
+    int c0[3], c1[3];
+    for (int k = 0; k < 3; ++k) {
+      c0[k] = std::clamp(int(std::floor((P.x[j][k] - P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
+      c1[k] = std::clamp(int(std::floor((P.x[j][k] + P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
+    }
+    for (int z = c0[2]; z <= c1[2]; ++z)
+      for (int y = c0[1]; y <= c1[1]; ++y)
+        for (int x = c0[0], c = int(P.binIndex(x, y, z)); x <= c1[0]; ++x, ++c) f(c);
   };
   for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { ++P.start[size_t(c) + 1]; });
   for (size_t c = 1; c < P.start.size(); ++c) P.start[c] += P.start[c - 1];
@@ -799,8 +822,7 @@ void SphAir::substep(const env::Environment& env, float dt) {
         g.hitBegin[k] = uint32_t(used);
         if (hasPlants) {
           const Vec3 x(g.px[k], g.py[k], g.pz[k]);
-          const Eigen::Vector3i c = g.cellCoord(x);
-          const uint32_t cell = g.cellIndex(c.x(), c.y(), c.z()), b = P.start[cell], e = P.start[cell + 1];
+          const uint32_t bin = P.binOf(x), b = P.start[bin], e = P.start[bin + 1];
           uint32_t* out = room(buffer, used, e - b + 4);
           // Four candidates at a time (their packed state transposed into lanes; lanes past the
           // list repeat its last entry and are masked off), four partial sums.
