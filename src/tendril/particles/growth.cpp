@@ -284,18 +284,21 @@ void ParticleWorld::grow(const env::Environment& env) {
       grown.angle = wind::nextGrowthAngle(grown.angle < 0.0f ? s.growthFlow.angle0 : grown.angle, flow);
       const Vec3 forward = q_[i] * Vec3::UnitY();
       windTurn = Quat::FromTwoVectors(forward, wind::windGrowthDirection(forward, windHere, grown.angle - before));
+      grown.length *= flow.length;
       grown.leafSize *= flow.leafRadius;
       grown.leafThickness *= flow.leafThickness;
     }
     // Sets a new internode's Growth-Flow state, length and rest orientation after spawn().
+    // The length factor stays with the lineage (a calm unit multiplies it by 1), applied to
+    // the species' current length, so live edits of particle_length still take effect.
     auto windGrowth = [&](uint32_t c, const Quat& deformation) {
-      if (!flow.active()) return;
+      if (!flow.active() && grown.length == 1.0f) return;  // never grew in wind: untouched
       flow_[c] = grown;
-      float half = targetHalfLength_[i] * flow.length;
-      if (s.growthFlow.maxLength > 0.0f) half = std::min(half, 0.5f * s.growthFlow.maxLength);
+      float half = targetHalfLength_[c] * grown.length;  // spawn() set the species' length
+      if (flow.active() && s.growthFlow.maxLength > 0.0f) half = std::min(half, 0.5f * s.growthFlow.maxLength);
       targetHalfLength_[c] = half;
       a_[c] = std::min(a_[c], half);
-      q_[c] = qp_[c] = (windTurn * q_[c]).normalized();
+      if (flow.active()) q_[c] = qp_[c] = (windTurn * q_[c]).normalized();
       qr_[c] = (deformation.conjugate() * q_[c]).normalized();
       groupRotation_[c] = (q_[c] * qr_[c].conjugate()).normalized();
       x_[c] = xp_[c] = head(i) + q_[c] * Vec3(0, a_[c], 0);

@@ -205,11 +205,13 @@ class ParticleWorld {
   std::vector<uint16_t> leafShape_;
   std::vector<float> leafTarget_;      // leaf particles: full-grown blade length
   // Growth-Flow (seed 001) state of the internode a particle is, relative to still air: its
-  // accumulated growth angle α (eq. 9; < 0 before the first windy internode) and the factors
-  // of eq. 17 and 16 its leaves grow with. Length (eq. 8) and radius (eq. 7) live in
-  // targetHalfLength_ and b_. Successors and laterals inherit it, times one step of wind.
+  // accumulated growth angle α (eq. 9; < 0 before the first windy internode), its length
+  // factor (eq. 8, times the species' particle length) and the factors of eq. 17 and 16 its
+  // leaves grow with; the radius (eq. 7) lives in b_. Successors and laterals inherit it,
+  // times one step of wind.
   struct FlowState {
     float angle = -1.0f;
+    float length = 1.0f;
     float leafSize = 1.0f;
     float leafThickness = 1.0f;
   };
