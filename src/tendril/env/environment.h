@@ -159,7 +159,7 @@ class Environment {
   // stroke point within its radius), weights (1 − d/r)², scaled by the largest weight.
   // Zero when no stroke is near.
   Vec3 attraction(const Vec3& p) const;
-  // Wind velocity (m/s) at p and time t. Constant field for now.
+  // Wind velocity (m/s) at p and time t: the wind field (constant, gusty, emitter jets or SPH air).
   Vec3 wind(const Vec3& p, float t) const;
 
   Bounds3 bounds() const;
