@@ -361,6 +361,39 @@ TEST(ParticleDynamics, SameSeedSameSnapshotForAnyThreadCount) {
   EXPECT_NE(one, other);
 }
 
+TEST(ParticleWorld, AllSnapshotsAtOnceEqualOneByOne) {
+  // Three plants with leaf particles and attached leaves, one with a broken-off piece.
+  auto env = makeEnv(kGroundAndWall);
+  ParticleWorld w;
+  ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
+  s.maxParticles = 400;
+  s.leafParticleLimit = 60;  // the plants pass it: leaf particles become attached leaves
+  s.breakThreshold = 0.0f;
+  ParticleSpecies small = s;
+  small.leafParticleLimit = 10000;  // the third keeps its leaf particles
+  for (uint32_t k = 0; k < 3; ++k)
+    w.addPlant("ivy" + std::to_string(k), k < 2 ? s : small, Vec3(0.4f * float(k) - 0.4f, 0.05f, 0.13f),
+               Vec3(0, 1, 0), k + 1, *env);
+  for (int k = 0; k < 300; ++k) w.step(*env);
+  w.cut(w.parent(lastParticle(w, 1)));
+  for (int k = 0; k < 5; ++k) w.step(*env);
+  std::vector<plant::PlantModel> all = w.snapshots();
+  ASSERT_EQ(all.size(), 3u);
+  size_t leaves = 0, broken = 0;
+  for (uint32_t p = 0; p < 3; ++p) {
+    const plant::PlantModel one = w.snapshot(p);
+    EXPECT_EQ(plant::contentHash(all[p]), plant::contentHash(one)) << "plant " << p;
+    leaves += one.leafCount();
+    for (uint32_t f : one.flags) broken += (f & plant::kNodeBroken) != 0;
+  }
+  EXPECT_GT(leaves, 30u);
+  EXPECT_GT(broken, 0u);
+  EXPECT_GT(w.attachedLeaves().size(), 0u);
+  size_t leafParticles = 0;
+  for (uint32_t i = 0; i < w.capacity(); ++i) leafParticles += w.active(i) && (w.flags(i) & kLeaf);
+  EXPECT_GT(leafParticles, 0u);
+}
+
 TEST(ParticleWorld, SeedsInsideObstaclesAreRejected) {
   auto env = makeEnv(kGroundAndWall);
   ParticleWorld w;

@@ -15,6 +15,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace tendril::models {
 
@@ -32,6 +33,13 @@ class PlantSystem {
   virtual size_t plantCount() const = 0;
   // The plant with the given index (in the order added) as a PlantModel.
   virtual plant::PlantModel snapshot(size_t plant) const = 0;
+  // Every plant as a PlantModel, in the order added (a model may do it in one pass).
+  virtual std::vector<plant::PlantModel> snapshots() const {
+    std::vector<plant::PlantModel> out;
+    out.reserve(plantCount());
+    for (size_t i = 0; i < plantCount(); ++i) out.push_back(snapshot(i));
+    return out;
+  }
   // Skeleton segments of all plants (progress reports).
   virtual size_t segmentCount() const = 0;
   // The plant's Growth-Flow constants (seed 001): how its growth and motion answer the wind.

@@ -27,6 +27,7 @@ class ParticlePlantSystem final : public models::PlantSystem {
   bool finished() const override { return false; }  // a particle world never stops moving
   size_t plantCount() const override { return world_.plantCount(); }
   plant::PlantModel snapshot(size_t plant) const override { return world_.snapshot(uint32_t(plant)); }
+  std::vector<plant::PlantModel> snapshots() const override { return world_.snapshots(); }
   size_t segmentCount() const override { return world_.particleCount(); }
   wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return world_.species(uint32_t(plant)).growthFlow; }
   void saveState(ArchiveWriter& out) const override { world_.saveState(out); }

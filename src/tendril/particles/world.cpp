@@ -303,16 +303,50 @@ void ParticleWorld::step(const env::Environment& env) {
 }
 
 plant::PlantModel ParticleWorld::snapshot(uint32_t plantId) const {
-  const Plant& pl = plants_.at(plantId);
+  (void)plants_.at(plantId);  // range check
+  SnapshotParts parts;
+  for (uint32_t i = 0; i < capacity(); ++i) {
+    if (!(flags_[i] & kActive) || plant_[i] != plantId) continue;
+    if (flags_[i] & kLeaf) parts.leafParticles.push_back(i);
+    else if ((flags_[i] & kDetached) && parent_[i] == kNone) parts.brokenRoots.push_back(i);
+  }
+  for (uint32_t k = 0; k < leaves_.size(); ++k)
+    if (plant_[leaves_[k].particle] == plantId) parts.attachedLeaves.push_back(k);
+  std::vector<int32_t> node(capacity(), -1);
+  return snapshotFrom(plantId, parts, node);
+}
+
+std::vector<plant::PlantModel> ParticleWorld::snapshots() const {
+  std::vector<SnapshotParts> parts(plants_.size());
+  for (uint32_t i = 0; i < capacity(); ++i) {
+    if (!(flags_[i] & kActive) || plant_[i] >= plants_.size()) continue;
+    if (flags_[i] & kLeaf) parts[plant_[i]].leafParticles.push_back(i);
+    else if ((flags_[i] & kDetached) && parent_[i] == kNone) parts[plant_[i]].brokenRoots.push_back(i);
+  }
+  for (uint32_t k = 0; k < leaves_.size(); ++k) {
+    const uint32_t p = plant_[leaves_[k].particle];
+    if (p < plants_.size()) parts[p].attachedLeaves.push_back(k);
+  }
+  // Every particle belongs to one plant, so one map serves them all.
+  std::vector<int32_t> node(capacity(), -1);
+  std::vector<plant::PlantModel> out;
+  out.reserve(plants_.size());
+  for (uint32_t p = 0; p < plants_.size(); ++p) out.push_back(snapshotFrom(p, parts[p], node));
+  return out;
+}
+
+plant::PlantModel ParticleWorld::snapshotFrom(uint32_t plantId, const SnapshotParts& parts,
+                                              std::vector<int32_t>& node) const {
+  const Plant& pl = plants_[plantId];
   plant::PlantModel m;
   m.name = pl.name;
   m.species = pl.species.name;
   m.bark = pl.species.bark;
   m.leafShapes = pl.species.leafShapes;
 
-  std::vector<int32_t> node(capacity(), -1);
+  std::vector<uint32_t> stack;
   auto addTree = [&](uint32_t root, bool broken) {
-    std::vector<uint32_t> stack = {root};
+    stack.assign(1, root);
     while (!stack.empty()) {
       uint32_t i = stack.back();
       stack.pop_back();
@@ -331,24 +365,22 @@ plant::PlantModel ParticleWorld::snapshot(uint32_t plantId) const {
       if (broken) d.flags |= plant::kNodeBroken;
       if (parent_[i] != kNone && order_[i] > order_[parent_[i]]) d.flags |= plant::kNodeBranchStart;
       node[i] = m.addNode(d);
-      // Children in reverse so they come out in creation order.
-      std::vector<uint32_t> kids;
-      for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) kids.push_back(c);
-      for (auto it = kids.rbegin(); it != kids.rend(); ++it) stack.push_back(*it);
+      // Children reversed on the stack, so they come out in creation order.
+      const size_t mark = stack.size();
+      for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) stack.push_back(c);
+      std::reverse(stack.begin() + std::ptrdiff_t(mark), stack.end());
     }
   };
   if (pl.root != kNone && (flags_[pl.root] & kActive)) addTree(pl.root, false);
-  for (uint32_t i = 0; i < capacity(); ++i)
-    if ((flags_[i] & kActive) && plant_[i] == plantId && (flags_[i] & kDetached) && parent_[i] == kNone &&
-        !(flags_[i] & kLeaf))
-      addTree(i, true);
+  for (uint32_t i : parts.brokenRoots) addTree(i, true);
 
   // Leaves: attached records and leaf particles, both relative to their branch node.
-  for (const AttachedLeaf& l : leaves_) {
-    if (plant_[l.particle] != plantId || node[l.particle] < 0 || l.size <= 0.0f) continue;
+  for (uint32_t k : parts.attachedLeaves) {
+    const AttachedLeaf& l = leaves_[k];
+    if (node[l.particle] < 0 || l.size <= 0.0f) continue;
     plant::PlantModel::LeafDef d;
     d.node = node[l.particle];
-    d.offset = Vec3(0, 2.0f * a_[l.particle], b_[l.particle]) ;
+    d.offset = Vec3(0, 2.0f * a_[l.particle], b_[l.particle]);
     d.rotation = l.particleFromLeaf;
     d.size = l.size;
     d.petiole = pl.species.leafPetiole * (l.size / std::max(l.maxSize, 1e-6f));
@@ -356,8 +388,7 @@ plant::PlantModel ParticleWorld::snapshot(uint32_t plantId) const {
     d.shape = l.shape;
     m.addLeaf(d);
   }
-  for (uint32_t i = 0; i < capacity(); ++i) {
-    if (!(flags_[i] & kActive) || !(flags_[i] & kLeaf) || plant_[i] != plantId) continue;
+  for (uint32_t i : parts.leafParticles) {
     uint32_t p = parent_[i];
     if (p == kNone || node[p] < 0) continue;
     const Vec3 base = x_[i] - q_[i] * Vec3(0, a_[i], 0);

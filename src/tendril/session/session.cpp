@@ -127,9 +127,12 @@ bool Session::finished() const {
 }
 
 std::vector<plant::PlantModel> Session::plants() const {
+  // Each system snapshots all its plants at once (particle plants share one buffer).
+  std::vector<std::vector<plant::PlantModel>> bySystem(systems_.size());
+  for (size_t s = 0; s < systems_.size(); ++s) bySystem[s] = systems_[s]->snapshots();
   std::vector<plant::PlantModel> out;
   out.reserve(plants_.size());
-  for (const PlantRef& r : plants_) out.push_back(systems_[r.system]->snapshot(r.index));
+  for (const PlantRef& r : plants_) out.push_back(std::move(bySystem[r.system].at(r.index)));
   return out;
 }
 
