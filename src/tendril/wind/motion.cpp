@@ -61,7 +61,6 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
   posed_.resize(n);
   force_.resize(n);
   angle_.assign(n, 0.0f);
-  axis_.assign(n, Vec3::UnitX());
   Q_.assign(n, Quat::Identity());
   T_.assign(n, Vec3::Zero());
 
@@ -241,7 +240,6 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
       }
     }
     angle_[i] = a;
-    axis_[i] = axis;
     turned_[i] = before + a;
     Q_[i] = a > 0.0f ? (Qp * swayRotation(a, axis)).normalized() : Qp;
     posed_[i] = Qp * rest_.position[i] + Tp;  // the node turns about its own base

@@ -83,7 +83,6 @@ class WindMotion {
   // Per node, per step.
   std::vector<Vec3> force_;        // F_w + T_r
   std::vector<float> angle_;
-  std::vector<Vec3> axis_;
   std::vector<Quat> Q_;
   std::vector<Vec3> T_;
   std::vector<Vec3> posed_;        // the node's posed position, Q_p p + T_p
