@@ -20,6 +20,14 @@ class GraphPlantSystem final : public models::PlantSystem {
     model.name = spec.name;
     plants_.push_back(std::move(model));
   }
+  // A new graph (the studio's p-graph editor): the plant is generated again at once.
+  void regrow(size_t plant, const scene::PlantSpec& spec, const env::Environment&) override {
+    const auto* params = spec.paramsAs<GraphPlantParams>();
+    if (!params || !params->model) throw Error("", "/graph", "a graph plant needs a \"graph\" file");
+    plant::PlantModel model = *params->model;
+    model.name = spec.name;
+    plants_.at(plant) = std::move(model);
+  }
   void step(const env::Environment&) override {}
   bool finished() const override { return true; }
   size_t plantCount() const override { return plants_.size(); }
@@ -46,11 +54,19 @@ class GraphPlantSystem final : public models::PlantSystem {
 
 std::shared_ptr<const scene::ModelParams> readGraphPlant(JsonObject& o, const std::filesystem::path& baseDir) {
   auto params = std::make_shared<GraphPlantParams>();
-  if (!o.has("graph")) throw o.error("graph", "is required for a graph plant: the graph file (JSON)");
+  // "graph_document": the graph itself (an edited graph, e.g. from the studio); "graph" then
+  // only names it and places its relative files.
+  const Json* document = o.find("graph_document");
+  if (document) {
+    if (!document->is_object())
+      throw o.error("graph_document", "expected a graph object (docs/graph-format.md), got " + describeJson(*document));
+  }
+  if (!o.has("graph") && !document)
+    throw o.error("graph", "is required for a graph plant: the graph file (JSON)");
   std::filesystem::path path = o.string("graph", "");
-  if (path.is_relative()) path = baseDir / path;
+  if (!path.empty() && path.is_relative()) path = baseDir / path;
   path = path.lexically_normal();
-  if (!std::filesystem::exists(path))
+  if (!document && !std::filesystem::exists(path))
     throw o.error("graph", fmt::format("graph file {} does not exist", path.string()));
 
   std::vector<Override> overrides;
@@ -61,7 +77,12 @@ std::shared_ptr<const scene::ModelParams> readGraphPlant(JsonObject& o, const st
     }
     ov->finish();
   }
-  params->graph = loadGraph(path, overrides);
+  if (document) {
+    const std::string name = path.empty() ? o.source() + " " + o.pointerTo("graph_document") : path.string() + " (edited)";
+    params->graph = parseGraph(*document, name, path.empty() ? baseDir : path.parent_path(), overrides);
+  } else {
+    params->graph = loadGraph(path, overrides);
+  }
 
   // The placement and seed are the scene's shared plant keys (already checked by the scene
   // reader); they are needed here because the plant is generated now.

@@ -16,26 +16,25 @@ class LSystemPlantSystem final : public models::PlantSystem {
   explicit LSystemPlantSystem(const models::SystemContext& c) : context_(c) {}
 
   void addPlant(const scene::PlantSpec& spec, const env::Environment& env) override {
-    const auto* params = spec.paramsAs<LSystemParams>();
-    if (!params || !params->grammar) throw Error("", "/grammar", "the plant has no grammar");
-    RunOptions o;
-    o.seed = spec.seed ^ mix64(context_.sceneSeed);
-    o.plant = plants_.size();
-    o.derivationLength = params->derivationLength;
-    o.start.position = spec.position;
-    o.start.heading = spec.direction;
-    o.stepTime = context_.stepTime;
-    o.growthFlow = params->growthFlow;
+    plants_.push_back(start(spec, plants_.size(), env));
+    names_.push_back(spec.name);
+    growthFlow_.push_back(spec.paramsAs<LSystemParams>()->growthFlow);
+  }
+
+  // A new grammar (or derivation length, placement...) for a growing plant: derived afresh
+  // with the plant's own random keys for as many steps as the plant had taken (fewer when the
+  // new derivation is shorter), each step asking the environment as it is now.
+  void regrow(size_t plant, const scene::PlantSpec& spec, const env::Environment& env) override {
+    const uint32_t steps = plants_.at(plant)->stepCount();
+    std::unique_ptr<LSystem> ls = start(spec, plant, env);
     try {
-      auto ls = std::make_unique<LSystem>(params->grammar, o);
-      ls->answerQueries(&env);
-      plants_.push_back(std::move(ls));
+      while (ls->stepCount() < steps && !ls->finished()) ls->step(&env);
     } catch (const Error& e) {
-      // Start: or the axiom failed: the Session names the scene plant; keep the grammar's place.
       throw Error("", "/grammar", e.what());
     }
-    names_.push_back(spec.name);
-    growthFlow_.push_back(params->growthFlow);
+    plants_[plant] = std::move(ls);
+    names_[plant] = spec.name;
+    growthFlow_[plant] = spec.paramsAs<LSystemParams>()->growthFlow;
   }
 
   void step(const env::Environment& env) override {
@@ -75,6 +74,27 @@ class LSystemPlantSystem final : public models::PlantSystem {
   }
 
  private:
+  std::unique_ptr<LSystem> start(const scene::PlantSpec& spec, size_t id, const env::Environment& env) const {
+    const auto* params = spec.paramsAs<LSystemParams>();
+    if (!params || !params->grammar) throw Error("", "/grammar", "the plant has no grammar");
+    RunOptions o;
+    o.seed = spec.seed ^ mix64(context_.sceneSeed);
+    o.plant = id;
+    o.derivationLength = params->derivationLength;
+    o.start.position = spec.position;
+    o.start.heading = spec.direction;
+    o.stepTime = context_.stepTime;
+    o.growthFlow = params->growthFlow;
+    try {
+      auto ls = std::make_unique<LSystem>(params->grammar, o);
+      ls->answerQueries(&env);
+      return ls;
+    } catch (const Error& e) {
+      // Start: or the axiom failed: the Session names the scene plant; keep the grammar's place.
+      throw Error("", "/grammar", e.what());
+    }
+  }
+
   models::SystemContext context_;
   std::vector<std::unique_ptr<LSystem>> plants_;
   std::vector<std::string> names_;
@@ -83,9 +103,28 @@ class LSystemPlantSystem final : public models::PlantSystem {
 
 std::shared_ptr<const scene::ModelParams> readLSystemPlant(JsonObject& o, const std::filesystem::path& baseDir) {
   auto params = std::make_shared<LSystemParams>();
-  if (!o.has("grammar"))
+  if (!o.has("grammar") && !o.has("grammar_text"))
     throw o.error("grammar", "is required: a built-in grammar name (e.g. \"japanese-ivy\") or a path to a .ls file");
-  std::string ref = o.requiredString("grammar");
+  const std::string ref = o.has("grammar") ? o.requiredString("grammar") : std::string();
+  // "grammar_text": the grammar itself (an edited grammar, e.g. from the studio); "grammar"
+  // then only names it and places its relative textures.
+  const bool inline_ = o.has("grammar_text");
+  const std::string text = inline_ ? o.requiredString("grammar_text") : std::string();
+  auto load = [&](const CompileOptions& options) {
+    if (!inline_) return loadGrammar(ref, baseDir, options, o.source(), o.pointerTo("grammar"));
+    CompileOptions c = options;
+    std::string name = o.source() + " " + o.pointerTo("grammar_text");
+    if (!ref.empty()) {
+      // The named grammar's directory and name, without needing its file any more.
+      const bool isPath = ref.find('/') != std::string::npos || ref.ends_with(".ls");
+      const std::filesystem::path p = std::filesystem::path(ref).is_absolute() ? std::filesystem::path(ref) : baseDir / ref;
+      c.dir = isPath ? p.lexically_normal().parent_path() : std::filesystem::path(TENDRIL_EXAMPLES_DIR) / "grammars";
+      name = (isPath ? p.lexically_normal().string() : ref) + " (edited)";
+    } else {
+      c.dir = baseDir;
+    }
+    return compileGrammar(text, name, c);
+  };
   CompileOptions options;
   if (const Json* d = o.find("define")) {
     if (!d->is_object())
@@ -98,7 +137,7 @@ std::shared_ptr<const scene::ModelParams> readLSystemPlant(JsonObject& o, const 
       options.defines.emplace_back(it.key(), v);
     }
   }
-  std::shared_ptr<const Grammar> grammar = loadGrammar(ref, baseDir, {}, o.source(), o.pointerTo("grammar"));
+  std::shared_ptr<const Grammar> grammar = load({});
   if (!options.defines.empty()) {
     // Unknown names are reported at the scene key, with the grammar's constants listed.
     for (const auto& [name, value] : options.defines) {
@@ -113,7 +152,7 @@ std::shared_ptr<const scene::ModelParams> readLSystemPlant(JsonObject& o, const 
                     fmt::format("grammar {} has no define: constant \"{}\" (its constants: {})", grammar->source, name,
                                 list.empty() ? "none" : list));
     }
-    grammar = loadGrammar(ref, baseDir, options, o.source(), o.pointerTo("grammar"));
+    grammar = load(options);
   }
   params->grammar = std::move(grammar);
   int64_t length = o.integer("derivation_length", -1, 0, 10'000'000);

@@ -58,6 +58,12 @@ class PlantSystem {
   virtual void setParams(size_t /*plant*/, const scene::PlantSpec& spec) {
     throw Error("", "", "plants of model \"" + spec.model + "\" cannot change their settings while growing");
   }
+  // Live edits of a whole plant: replaces its settings with `spec` (same model) and grows it
+  // again from its seed to the step it had reached, asking `env` as growth does. Models that
+  // cannot regrow change their parameters in place (setParams).
+  virtual void regrow(size_t plant, const scene::PlantSpec& spec, const env::Environment& /*env*/) {
+    setParams(plant, spec);
+  }
   // Removes the node's segment and everything beyond it (interactive cuts, seed 000 §5.1).
   // Throws Error for a model that cannot be cut or a node out of range.
   virtual void cut(size_t /*plant*/, uint32_t /*node*/) {

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include <cctype>
 #include <cmath>
 
 namespace tendril::session {
@@ -75,6 +76,41 @@ env::Light readLight(JsonObject& o) {
   return l;
 }
 
+// "scale": a number (uniform) or [x, y, z]; each factor in [1e-4, 1e4].
+Vec3 readScale(JsonObject& o, std::string_view key) {
+  const Json* s = o.find(key);
+  if (s && s->is_number()) return Vec3::Constant(o.numberf(key, 1.0f, 1e-4, 1e4));
+  if (s && !s->is_array()) throw o.error(key, "expected a number or [x, y, z] (factors > 0), got " + describeJson(*s));
+  return o.vec3(key, Vec3::Ones(), 1e-4, 1e4);
+}
+
+// A uniform scale is written as one number.
+Json scaleJson(const Vec3& s) {
+  if (s.x() == s.y() && s.y() == s.z()) return s.x();
+  return vec3Json(s);
+}
+
+// "translation" [x, y, z] and "rotation" as a unit quaternion [w, x, y, z].
+RigidTransform readTransform(JsonObject& o) {
+  RigidTransform t;
+  t.translation = o.vec3("translation", Vec3::Zero());
+  if (const Json* r = o.find("rotation")) {
+    if (!r->is_array() || r->size() != 4 || !(*r)[0].is_number() || !(*r)[1].is_number() || !(*r)[2].is_number() ||
+        !(*r)[3].is_number())
+      throw o.error("rotation", "expected a quaternion [w, x, y, z], got " + describeJson(*r));
+    Quat q((*r)[0].get<float>(), (*r)[1].get<float>(), (*r)[2].get<float>(), (*r)[3].get<float>());
+    if (!(std::abs(q.norm() - 1.0f) < 1e-3f)) throw o.error("rotation", "is not a unit quaternion [w, x, y, z]");
+    t.rotation = q;
+  }
+  return t;
+}
+
+void writeTransform(Json& j, const RigidTransform& t) {
+  const Quat& q = t.rotation;
+  j["translation"] = vec3Json(t.translation);
+  j["rotation"] = Json::array({q.w(), q.x(), q.y(), q.z()});
+}
+
 template <class... F>
 struct Overloaded : F... {
   using F::operator()...;
@@ -108,6 +144,15 @@ void requireParticle(const particles::ParticleWorld& w, uint32_t worldPlant, uin
 
 void requireFinite(const Vec3& v, const char* what, const char* key) {
   if (!isFinite(v)) throw Error(what, std::string("/") + key, "is not finite");
+}
+
+// A transform an edit can apply: finite, with a normalised rotation.
+RigidTransform checkedTransform(RigidTransform t, const char* what) {
+  requireFinite(t.translation, what, "translation");
+  const float n = t.rotation.norm();
+  if (!(n > 1e-6f) || !std::isfinite(n)) throw Error(what, "/rotation", "is not a rotation");
+  t.rotation.normalize();
+  return t;
 }
 
 env::WindEmitter checkedEmitter(env::WindEmitter e, const char* what) {
@@ -234,13 +279,27 @@ void applyTo(Session& s, const Edit& edit, Editor& editor, uint32_t& dragParticl
             if (e.obstacle >= env.obstacleCount())
               throw Error("move_obstacle", "/obstacle",
                           fmt::format("there is no obstacle {} (the scene has {})", e.obstacle, env.obstacleCount()));
-            RigidTransform t = e.worldFromLocal;
-            requireFinite(t.translation, "move_obstacle", "translation");
-            const float n = t.rotation.norm();
-            if (!(n > 1e-6f) || !std::isfinite(n)) throw Error("move_obstacle", "/rotation", "is not a rotation");
-            t.rotation.normalize();
-            env.setObstacleTransform(e.obstacle, t);
+            const RigidTransform t = checkedTransform(e.worldFromLocal, "move_obstacle");
+            if (e.scale) {
+              try {
+                s.setObstacleScale(e.obstacle, *e.scale);  // may replace the environment
+              } catch (const Error& err) {
+                throw Error("move_obstacle", err.location(), err.message());
+              }
+            }
+            s.environment().setObstacleTransform(e.obstacle, t);
             s.environmentChanged();
+          },
+          [&](const AddObstacle& e) {
+            const RigidTransform t = checkedTransform(e.worldFromLocal, "add_obstacle");
+            if (!isFinite(e.color) || !(e.color.array() >= 0.0f).all() || !(e.color.array() <= 1.0f).all())
+              throw Error("add_obstacle", "/color", "must be linear RGB in [0, 1]");
+            try {
+              s.importObstacle(e.path, e.name, t, e.scale, e.color);
+            } catch (const Error& err) {
+              if (!err.source().empty()) throw;  // the mesh file's own error names it
+              throw Error("add_obstacle", err.location(), err.message());
+            }
           },
           [&](const MoveLight& e) {
             std::vector<env::Light> lights = env.lights();
@@ -290,6 +349,47 @@ void applyTo(Session& s, const Edit& edit, Editor& editor, uint32_t& dragParticl
             plant["species"] = species;
             s.setPlantDescription(e.plant, plant, "set_species");
           },
+          [&](const SetGrammar& e) {
+            requirePlant(s, e.plant, "set_grammar");
+            if (s.plantSpec(e.plant).model != "lsystem")
+              throw Error("set_grammar", "/plant",
+                          fmt::format("plant {} is of model \"{}\"; only L-system plants have a grammar", e.plant,
+                                      s.plantSpec(e.plant).model));
+            Json plant = s.plantDescription(e.plant);
+            if (!plant.is_object())
+              throw Error("set_grammar", "/plant", fmt::format("plant {} was added from code; its grammar cannot be edited", e.plant));
+            plant["grammar_text"] = e.text;
+            if (e.derivationLength) plant["derivation_length"] = *e.derivationLength;
+            try {
+              s.setPlantDescription(e.plant, plant, "set_grammar");
+            } catch (const Error& err) {
+              // Errors in the text are placed in it (line:col), as the CLI prints them.
+              const std::string& loc = err.location();
+              const bool inText = !loc.empty() && std::isdigit(static_cast<unsigned char>(loc[0]));
+              throw Error("set_grammar", inText ? "/text " + loc : "/text", err.message());
+            }
+          },
+          [&](const SetGraph& e) {
+            requirePlant(s, e.plant, "set_graph");
+            if (s.plantSpec(e.plant).model != "graph")
+              throw Error("set_graph", "/plant",
+                          fmt::format("plant {} is of model \"{}\"; only graph plants have a p-graph", e.plant,
+                                      s.plantSpec(e.plant).model));
+            if (!e.graph.is_object())
+              throw Error("set_graph", "/graph", "expected a graph object, got " + describeJson(e.graph));
+            Json plant = s.plantDescription(e.plant);
+            if (!plant.is_object())
+              throw Error("set_graph", "/plant", fmt::format("plant {} was added from code; its graph cannot be edited", e.plant));
+            plant["graph_document"] = e.graph;
+            try {
+              s.setPlantDescription(e.plant, plant, "set_graph");
+            } catch (const Error& err) {
+              // Errors in the graph are placed in it (its own JSON pointer).
+              const std::string& loc = err.location();
+              const bool inGraph = !loc.empty() && loc[0] == '/' && loc.rfind("/graph", 0) != 0;
+              throw Error("set_graph", inGraph ? "/graph" + loc : "/graph", err.message());
+            }
+          },
           [&](const Step& e) {
             for (uint32_t i = 0; i < e.count; ++i) s.step();
           },
@@ -307,7 +407,8 @@ const char* editName(const Edit& edit) {
   static constexpr const char* kNames[] = {"seed_plant",    "seed_branch",  "cut",         "drag_begin",
                                            "drag_move",     "drag_end",     "paint_stroke", "move_obstacle",
                                            "move_light",    "add_emitter",  "edit_emitter", "remove_emitter",
-                                           "set_species",   "step",         "undo",         "redo"};
+                                           "set_species",   "step",         "undo",         "redo",
+                                           "add_obstacle",  "set_grammar",  "set_graph"};
   static_assert(std::size(kNames) == std::variant_size_v<Edit>);
   return kNames[edit.index()];
 }
@@ -341,10 +442,16 @@ Json editToJson(const Edit& edit) {
                    j["points"] = pts;
                  },
                  [&](const MoveObstacle& e) {
-                   const Quat& q = e.worldFromLocal.rotation;
                    j["obstacle"] = e.obstacle;
-                   j["translation"] = vec3Json(e.worldFromLocal.translation);
-                   j["rotation"] = Json::array({q.w(), q.x(), q.y(), q.z()});
+                   writeTransform(j, e.worldFromLocal);
+                   if (e.scale) j["scale"] = scaleJson(*e.scale);
+                 },
+                 [&](const AddObstacle& e) {
+                   j["path"] = e.path;
+                   if (!e.name.empty()) j["name"] = e.name;
+                   writeTransform(j, e.worldFromLocal);
+                   j["scale"] = scaleJson(e.scale);
+                   j["color"] = vec3Json(e.color);
                  },
                  [&](const MoveLight& e) {
                    j["light"] = e.light;
@@ -357,6 +464,11 @@ Json editToJson(const Edit& edit) {
                  },
                  [&](const RemoveEmitter& e) { j["index"] = e.index; },
                  [&](const SetSpecies& e) { j["plant"] = e.plant, j["species"] = e.keys; },
+                 [&](const SetGrammar& e) {
+                   j["plant"] = e.plant, j["text"] = e.text;
+                   if (e.derivationLength) j["derivation_length"] = *e.derivationLength;
+                 },
+                 [&](const SetGraph& e) { j["plant"] = e.plant, j["graph"] = e.graph; },
                  [&](const Step& e) { j["count"] = e.count; },
                  [&](const Undo&) {},
                  [&](const Redo&) {},
@@ -370,7 +482,8 @@ Edit readEdit(JsonObject& o) {
   const std::string kind = o.choice("edit", "", {"seed_plant", "seed_branch", "cut", "drag_begin", "drag_move",
                                                  "drag_end", "paint_stroke", "move_obstacle", "move_light",
                                                  "add_emitter", "edit_emitter", "remove_emitter", "set_species",
-                                                 "step", "undo", "redo"});
+                                                 "step", "undo", "redo", "add_obstacle", "set_grammar",
+                                                 "set_graph"});
   if (kind == "seed_plant") {
     SeedPlant e;
     e.model = o.string("model", e.model);
@@ -438,15 +551,18 @@ Edit readEdit(JsonObject& o) {
   if (kind == "move_obstacle") {
     MoveObstacle e;
     e.obstacle = readIndex(o, "obstacle");
-    e.worldFromLocal.translation = o.vec3("translation", Vec3::Zero());
-    if (const Json* r = o.find("rotation")) {
-      if (!r->is_array() || r->size() != 4 || !(*r)[0].is_number() || !(*r)[1].is_number() || !(*r)[2].is_number() ||
-          !(*r)[3].is_number())
-        throw o.error("rotation", "expected a quaternion [w, x, y, z], got " + describeJson(*r));
-      Quat q((*r)[0].get<float>(), (*r)[1].get<float>(), (*r)[2].get<float>(), (*r)[3].get<float>());
-      if (!(std::abs(q.norm() - 1.0f) < 1e-3f)) throw o.error("rotation", "is not a unit quaternion [w, x, y, z]");
-      e.worldFromLocal.rotation = q;
-    }
+    e.worldFromLocal = readTransform(o);
+    if (o.has("scale")) e.scale = readScale(o, "scale");
+    return e;
+  }
+  if (kind == "add_obstacle") {
+    AddObstacle e;
+    if (!o.has("path")) throw o.error("path", "is required: the mesh file (.obj, .ply, .stl, .gltf, .glb...)");
+    e.path = o.requiredString("path");
+    e.name = o.string("name", "");
+    e.worldFromLocal = readTransform(o);
+    e.scale = readScale(o, "scale");
+    e.color = o.vec3("color", e.color, 0.0, 1.0);
     return e;
   }
   if (kind == "move_light") {
@@ -469,6 +585,22 @@ Edit readEdit(JsonObject& o) {
     const Json* sp = o.find("species");
     if (!sp || !sp->is_object()) throw o.error("species", "is required: an object of species keys");
     e.keys = *sp;
+    return e;
+  }
+  if (kind == "set_grammar") {
+    SetGrammar e;
+    e.plant = readIndex(o, "plant");
+    if (!o.has("text")) throw o.error("text", "is required: the grammar (docs/grammar.md) as text");
+    e.text = o.requiredString("text");
+    if (o.has("derivation_length")) e.derivationLength = int(o.integer("derivation_length", 0, 0, 10'000'000));
+    return e;
+  }
+  if (kind == "set_graph") {
+    SetGraph e;
+    e.plant = readIndex(o, "plant");
+    const Json* g = o.find("graph");
+    if (!g || !g->is_object()) throw o.error("graph", "is required: a graph object (docs/graph-format.md)");
+    e.graph = *g;
     return e;
   }
   if (kind == "step") return Step{uint32_t(o.integer("count", 1, 1, 10'000'000))};

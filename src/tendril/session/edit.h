@@ -80,10 +80,23 @@ struct PaintStroke {
   env::Stroke stroke;
 };
 
-// Moves/rotates an obstacle (by index in the environment) while plants grow.
+// Moves/rotates an obstacle (by index in the environment) while plants grow, and optionally
+// rescales its mesh in its own frame (factors > 0 per axis; unset = keep the current scale).
 struct MoveObstacle {
   uint32_t obstacle = 0;
   RigidTransform worldFromLocal;
+  std::optional<Vec3> scale;
+};
+
+// Imports a support mesh (a file env/mesh_import.h reads: .obj, .ply, .stl, .gltf, .glb,
+// .fbx...) as a new obstacle the plants collide with and climb. A relative path is resolved
+// against the scene's directory. A missing or bad file is an Error naming it.
+struct AddObstacle {
+  std::string path;
+  std::string name;  // empty = the file's stem
+  RigidTransform worldFromLocal;
+  Vec3 scale = Vec3::Ones();                // applied to the mesh in its own frame
+  Vec3 color = Vec3(0.6f, 0.6f, 0.6f);      // linear RGB, for rendering
 };
 
 // Replaces a light (by index): its position (point lights) and direction (directional).
@@ -111,6 +124,27 @@ struct SetSpecies {
   Json keys = Json::object();
 };
 
+// A new grammar for an L-system plant (the studio's L-system editor): the grammar text
+// replaces the plant's ("grammar_text" in its scene-file object; its "grammar" still names it
+// and places relative textures), optionally with a new derivation length, and the plant is
+// derived again from its seed to the derivation step it had reached. A grammar that does not
+// compile is an Error at "/text line:col", and nothing changes.
+struct SetGrammar {
+  uint32_t plant = 0;
+  std::string text;
+  std::optional<int> derivationLength;
+};
+
+// A new p-graph for a component-graph plant (the studio's p-graph editor: parameters,
+// components, links): the graph document (docs/graph-format.md) replaces the plant's
+// ("graph_document" in its scene-file object; its "graph" still names it and places its
+// relative files) and the plant is generated again at once. A graph that does not read is an
+// Error at "/graph<pointer in the graph>", and nothing changes.
+struct SetGraph {
+  uint32_t plant = 0;
+  Json graph = Json::object();
+};
+
 // Advances the simulation (not an undo entry of its own).
 struct Step {
   uint32_t count = 1;
@@ -121,7 +155,8 @@ struct Undo {};
 struct Redo {};
 
 using Edit = std::variant<SeedPlant, SeedBranch, Cut, DragBegin, DragMove, DragEnd, PaintStroke, MoveObstacle,
-                          MoveLight, AddEmitter, EditEmitter, RemoveEmitter, SetSpecies, Step, Undo, Redo>;
+                          MoveLight, AddEmitter, EditEmitter, RemoveEmitter, SetSpecies, Step, Undo, Redo,
+                          AddObstacle, SetGrammar, SetGraph>;
 
 // The edit's JSON "edit" name, e.g. "seed_plant".
 const char* editName(const Edit& edit);

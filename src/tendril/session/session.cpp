@@ -3,6 +3,7 @@
 #include "tendril/core/archive.h"
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
+#include "tendril/env/mesh_import.h"
 #include "tendril/particles/particle_model.h"
 
 #include <fmt/format.h>
@@ -12,7 +13,8 @@ namespace tendril::session {
 namespace {
 
 constexpr uint32_t kStateTag = 0x54535331;  // "1SST"
-constexpr uint32_t kStateVersion = 1;
+// Version 2 added obstacle scales and imported obstacles; version 1 states are still read.
+constexpr uint32_t kStateVersion = 2;
 
 void saveWind(ArchiveWriter& out, const env::WindSettings& w) {
   out.value(w.mode);
@@ -55,6 +57,7 @@ Session::Session(scene::Scene scene, Json sceneDocument, std::filesystem::path b
       env_(std::make_unique<env::Environment>()) {
   if (baseDir_.empty() && !scene_.path.empty()) baseDir_ = scene_.path.parent_path();
   scene::populateEnvironment(scene_, *env_);
+  obstacleScales_.assign(scene_.obstacles.size(), Vec3::Ones());
   const Json* plants = sceneDocument_.is_object() && sceneDocument_.contains("plants") ? &sceneDocument_["plants"]
                                                                                         : nullptr;
   for (size_t i = 0; i < scene_.plants.size(); ++i) {
@@ -202,7 +205,7 @@ void Session::setPlantDescription(size_t plant, const Json& description, const s
   if (spec.model != entry.spec.model)
     throw Error(source, "/model", fmt::format("plant {} is of model \"{}\", not \"{}\"", plant, entry.spec.model, spec.model));
   try {
-    system(plant).setParams(indexInSystem(plant), spec);
+    system(plant).regrow(indexInSystem(plant), spec, *env_);
   } catch (const Error& e) {
     if (!e.source().empty()) throw;
     throw Error(source, e.location(), e.message());
@@ -214,6 +217,105 @@ void Session::setPlantDescription(size_t plant, const Json& description, const s
 
 void Session::environmentChanged() { env_->commit(); }
 
+// --- obstacles at run time ---
+
+namespace {
+
+bool validScale(const Vec3& s) {
+  return isFinite(s) && (s.array() >= 1e-4f).all() && (s.array() <= 1e4f).all();
+}
+
+}  // namespace
+
+std::shared_ptr<const TriangleMesh> Session::importedMesh(const std::string& path) {
+  std::filesystem::path p = path;
+  if (p.is_relative()) p = baseDir_ / p;
+  const std::string key = p.lexically_normal().string();
+  auto it = meshCache_.find(key);
+  if (it != meshCache_.end()) return it->second;
+  auto mesh = std::make_shared<const TriangleMesh>(env::loadMeshFile(key));
+  meshCache_.emplace(key, mesh);
+  return mesh;
+}
+
+env::ObstacleDef Session::obstacleDef(size_t index) const {
+  env::ObstacleDef d;
+  if (index < scene_.obstacles.size()) {
+    d = scene_.obstacles[index];
+  } else {
+    const ImportedObstacle& o = imported_.at(index - scene_.obstacles.size());
+    d.name = o.name;
+    d.kind = env::ObstacleKind::Mesh;
+    d.source = o.path;
+    d.mesh = *o.mesh;
+    d.color = o.color;
+  }
+  const Vec3& scale = obstacleScales_.at(index);
+  if (scale != Vec3::Ones())
+    for (Vec3& v : d.mesh.positions) v = v.cwiseProduct(scale);
+  return d;
+}
+
+void Session::rebuildEnvironment(const std::vector<RigidTransform>& transforms) {
+  auto env = std::make_unique<env::Environment>();
+  for (size_t i = 0; i < obstacleScales_.size(); ++i) {
+    env::ObstacleDef d = obstacleDef(i);
+    if (i < transforms.size()) d.worldFromLocal = transforms[i];
+    env->addObstacle(std::move(d));
+  }
+  env->setLights(env_->lights());
+  env->setStrokes(env_->strokes());
+  env->setWind(env_->windField().settings());
+  if (air_) env->setAirFlow(air_.get());
+  env->commit();
+  env_ = std::move(env);
+  ++obstacleRevision_;
+}
+
+uint32_t Session::importObstacle(const std::string& path, std::string name, const RigidTransform& worldFromLocal,
+                                 const Vec3& scale, const Vec3& color) {
+  if (path.empty()) throw Error("", "/path", "is empty: give a mesh file (.obj, .ply, .stl, .gltf, .glb...)");
+  if (!validScale(scale))
+    throw Error("", "/scale",
+                fmt::format("must be in [1e-4, 1e4] on every axis, got [{}, {}, {}]", scale.x(), scale.y(), scale.z()));
+  if (!isFinite(worldFromLocal.translation) || !isFinite(Vec3(worldFromLocal.rotation.vec())) ||
+      !std::isfinite(worldFromLocal.rotation.w()))
+    throw Error("", "/translation", "the obstacle's transform is not finite");
+  ImportedObstacle o;
+  o.path = path;
+  o.name = name.empty() ? std::filesystem::path(path).stem().string() : std::move(name);
+  o.color = color;
+  o.mesh = importedMesh(path);  // throws Error(file, ...) naming the file
+  imported_.push_back(o);
+  obstacleScales_.push_back(scale);
+  env::ObstacleDef d = obstacleDef(obstacleScales_.size() - 1);
+  d.worldFromLocal = worldFromLocal;
+  env_->addObstacle(std::move(d));
+  env_->commit();
+  ++obstacleRevision_;
+  return uint32_t(env_->obstacleCount() - 1);
+}
+
+const std::string& Session::obstaclePath(uint32_t obstacle) const {
+  static const std::string kNone;
+  if (obstacle >= obstacleScales_.size()) throw Error("", "", fmt::format("there is no obstacle {}", obstacle));
+  return obstacle < scene_.obstacles.size() ? kNone : imported_[obstacle - scene_.obstacles.size()].path;
+}
+
+void Session::setObstacleScale(uint32_t obstacle, const Vec3& scale) {
+  if (obstacle >= obstacleScales_.size())
+    throw Error("", "/obstacle",
+                fmt::format("there is no obstacle {} (the scene has {})", obstacle, obstacleScales_.size()));
+  if (!validScale(scale))
+    throw Error("", "/scale",
+                fmt::format("must be in [1e-4, 1e4] on every axis, got [{}, {}, {}]", scale.x(), scale.y(), scale.z()));
+  if (obstacleScales_[obstacle] == scale) return;
+  std::vector<RigidTransform> transforms(env_->obstacleCount());
+  for (uint32_t o = 0; o < transforms.size(); ++o) transforms[o] = env_->obstacle(o).worldFromLocal;
+  obstacleScales_[obstacle] = scale;
+  rebuildEnvironment(transforms);
+}
+
 std::vector<uint8_t> Session::saveState() const {
   ArchiveWriter out;
   out.tag(kStateTag);
@@ -224,9 +326,19 @@ std::vector<uint8_t> Session::saveState() const {
     out.string(specs_[i].spec.model);
     out.string(specs_[i].text);
   }
-  // The environment's editable state; obstacle meshes come from the scene.
+  // The environment's editable state; obstacle meshes come from the scene and from the
+  // imported files (read again on load).
   out.u64(env_->obstacleCount());
-  for (uint32_t o = 0; o < env_->obstacleCount(); ++o) out.value(env_->obstacle(o).worldFromLocal);
+  for (uint32_t o = 0; o < env_->obstacleCount(); ++o) {
+    out.value(env_->obstacle(o).worldFromLocal);
+    out.value(obstacleScales_[o]);
+  }
+  out.u64(imported_.size());
+  for (const ImportedObstacle& o : imported_) {
+    out.string(o.path);
+    out.string(o.name);
+    out.value(o.color);
+  }
   out.vector(env_->lights());
   out.u64(env_->strokes().size());
   for (const env::Stroke& s : env_->strokes()) {
@@ -251,7 +363,7 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
   in.tag(kStateTag, "a session state");
   const size_t versionAt = in.position();
   const uint32_t version = in.u32();
-  if (version != kStateVersion)
+  if (version != kStateVersion && version != 1)
     in.fail(versionAt, fmt::format("session state version {} is not supported (this build reads {})", version,
                                    kStateVersion));
   const uint32_t steps = in.u32();
@@ -281,12 +393,36 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
   }
 
   const size_t obstaclesAt = in.position();
-  const uint64_t obstacles = in.u64();
-  if (obstacles != env_->obstacleCount())
+  const uint64_t obstacles = in.count(sizeof(RigidTransform), "obstacles");
+  if (obstacles < scene_.obstacles.size())
     in.fail(obstaclesAt, fmt::format("the saved environment has {} obstacles, the scene {}", obstacles,
-                                     env_->obstacleCount()));
+                                     scene_.obstacles.size()));
   std::vector<RigidTransform> transforms(obstacles);
-  for (RigidTransform& t : transforms) in.value(t);
+  std::vector<Vec3> scales(obstacles, Vec3::Ones());
+  for (size_t o = 0; o < obstacles; ++o) {
+    in.value(transforms[o]);
+    if (version >= 2) {
+      const size_t at = in.position();
+      in.value(scales[o]);
+      if (!validScale(scales[o])) in.fail(at, fmt::format("obstacle {} has a bad scale", o));
+    }
+  }
+  std::vector<ImportedObstacle> imported;
+  if (version >= 2) {
+    const size_t importedAt = in.position();
+    imported.resize(size_t(in.count(24, "imported obstacles")));
+    if (scene_.obstacles.size() + imported.size() != obstacles)
+      in.fail(importedAt, fmt::format("the saved environment has {} obstacles: {} from the scene and {} imported",
+                                      obstacles, scene_.obstacles.size(), imported.size()));
+    for (ImportedObstacle& o : imported) {
+      o.path = in.string();
+      o.name = in.string();
+      in.value(o.color);
+    }
+  } else if (obstacles != scene_.obstacles.size()) {
+    in.fail(obstaclesAt, fmt::format("the saved environment has {} obstacles, the scene {}", obstacles,
+                                     scene_.obstacles.size()));
+  }
   std::vector<env::Light> lights = in.vector<env::Light>();
   std::vector<env::Stroke> strokes(size_t(in.count(17, "strokes")));
   for (env::Stroke& s : strokes) {
@@ -338,16 +474,42 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
     air->loadState(in);
   }
   if (!in.atEnd()) in.fail("unexpected data after the session state");
+  // The imported meshes (from this session's cache, or read again from their files).
+  for (ImportedObstacle& o : imported) {
+    try {
+      o.mesh = importedMesh(o.path);
+    } catch (const Error& e) {
+      throw Error(source, "", fmt::format("imported obstacle \"{}\": {}", o.name, e.what()));
+    }
+  }
 
-  // Everything read: now the session changes.
-  for (uint32_t o = 0; o < transforms.size(); ++o) env_->setObstacleTransform(o, transforms[o]);
-  env_->setLights(std::move(lights));
-  env_->setStrokes(std::move(strokes));
-  env_->setWind(std::move(wind));
+  // Everything read: now the session changes. The environment is rebuilt when its obstacle
+  // meshes differ (an import or a rescale undone); obstacles imported since are appended.
   if (air) {
     air_ = std::move(air);
     env_->setAirFlow(air_.get());
   }
+  const bool samePrefix = imported.size() >= imported_.size() &&
+                          std::equal(imported_.begin(), imported_.end(), imported.begin()) &&
+                          std::equal(obstacleScales_.begin(), obstacleScales_.end(), scales.begin());
+  if (!samePrefix) {
+    imported_ = std::move(imported);
+    obstacleScales_ = std::move(scales);
+    rebuildEnvironment(transforms);
+  } else if (imported.size() > imported_.size()) {
+    for (size_t i = imported_.size(); i < imported.size(); ++i) {
+      imported_.push_back(imported[i]);
+      obstacleScales_.push_back(scales[scene_.obstacles.size() + i]);
+      env::ObstacleDef d = obstacleDef(obstacleScales_.size() - 1);
+      d.worldFromLocal = transforms[obstacleScales_.size() - 1];
+      env_->addObstacle(std::move(d));
+    }
+    ++obstacleRevision_;
+  }
+  for (uint32_t o = 0; o < transforms.size(); ++o) env_->setObstacleTransform(o, transforms[o]);
+  env_->setLights(std::move(lights));
+  env_->setStrokes(std::move(strokes));
+  env_->setWind(std::move(wind));
   env_->commit();
   systems_ = std::move(systems);
   systemModels_ = std::move(systemModels);
@@ -386,6 +548,10 @@ uint64_t Session::stateHash() const {
     const RigidTransform& t = env_->obstacle(o).worldFromLocal;
     h.add(t.rotation.coeffs().data(), 4 * sizeof(float));
     h.add(t.translation);
+    h.add(obstacleScales_[o]);
+  }
+  for (const ImportedObstacle& o : imported_) {
+    h.add(std::string_view(o.path)), h.add(std::string_view(o.name)), h.add(o.color);
   }
   for (const env::Light& l : env_->lights()) {
     h.add(uint32_t(l.type)), h.add(l.direction), h.add(l.position), h.add(l.intensity), h.add(l.angularRadius);

@@ -12,8 +12,10 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace tendril::particles {
@@ -100,6 +102,29 @@ class Session {
   // Commits environment edits (obstacle moves, strokes) and refreshes what depends on them.
   void environmentChanged();
 
+  // --- obstacles at run time ---
+  // The environment's obstacles are the scene's, then those imported since, in that order.
+  // Imports a mesh file (any format env/mesh_import.h reads: .obj, .ply, .stl, .gltf, .glb,
+  // .fbx...) as a new obstacle; a relative `path` is resolved against baseDir(). `scale` is
+  // applied to the mesh in its own frame (as a scene's mesh "scale"); an empty name is the
+  // file's stem. Throws Error naming the file for a missing, unreadable or empty mesh, and for
+  // a non-positive scale, leaving the session as it was. Returns the obstacle's index.
+  uint32_t importObstacle(const std::string& path, std::string name, const RigidTransform& worldFromLocal,
+                          const Vec3& scale = Vec3::Ones(), const Vec3& color = Vec3(0.6f, 0.6f, 0.6f));
+  // The mesh file of an imported obstacle as given to importObstacle ("" for the scene's own).
+  const std::string& obstaclePath(uint32_t obstacle) const;
+  // The factors the obstacle's mesh is scaled by in its own frame: (1, 1, 1) for the mesh as
+  // the scene (or the import) made it.
+  const Vec3& obstacleScale(uint32_t obstacle) const { return obstacleScales_.at(obstacle); }
+  // Rescales an obstacle's mesh in its own frame (each factor in [1e-4, 1e4]; non-uniform is
+  // allowed). Environment transforms are rigid, so the environment is rebuilt with the scaled
+  // mesh (its distance field is built again on first use). Throws Error for a bad scale.
+  void setObstacleScale(uint32_t obstacle, const Vec3& scale);
+  // Changes whenever obstacle meshes change (an import, a rescale, an undo of either): views
+  // that keep obstacle meshes fetch them again. The Environment object itself may be replaced
+  // then, so do not keep references to environment() across edits.
+  uint64_t obstacleRevision() const { return obstacleRevision_; }
+
  private:
   struct PlantRef {
     size_t system;  // index into systems_
@@ -111,8 +136,24 @@ class Session {
     Json description;
     std::string text;  // description.dump(), compared on loadState
   };
+  // An obstacle imported at run time (importObstacle); its mesh as read, unscaled.
+  struct ImportedObstacle {
+    std::string path;  // as given
+    std::string name;
+    Vec3 color = Vec3(0.6f, 0.6f, 0.6f);
+    std::shared_ptr<const TriangleMesh> mesh;
+    bool operator==(const ImportedObstacle& o) const {
+      return path == o.path && name == o.name && color == o.color && mesh == o.mesh;
+    }
+  };
   size_t systemFor(const std::string& model);
-  void rebuildSystems(size_t plantCount);
+  // The mesh file behind an imported obstacle, read once per session (undo and redo reuse it).
+  std::shared_ptr<const TriangleMesh> importedMesh(const std::string& path);
+  // The environment's definition of obstacle `index` at its current scale (not transform).
+  env::ObstacleDef obstacleDef(size_t index) const;
+  // Replaces the environment with one made afresh from the scene's and the imported obstacles
+  // at their scales, keeping every obstacle transform, light, stroke and the wind.
+  void rebuildEnvironment(const std::vector<RigidTransform>& transforms);
 
   scene::Scene scene_;
   Json sceneDocument_;
@@ -123,6 +164,10 @@ class Session {
   std::vector<std::string> systemModels_;
   std::vector<PlantRef> plants_;  // per scene plant
   std::unique_ptr<wind::SphAir> air_;  // simulated air (wind mode sph)
+  std::vector<ImportedObstacle> imported_;
+  std::vector<Vec3> obstacleScales_;  // per obstacle, in environment order
+  std::map<std::string, std::shared_ptr<const TriangleMesh>> meshCache_;  // resolved path -> mesh
+  uint64_t obstacleRevision_ = 0;
   uint32_t steps_ = 0;
 };
 
