@@ -13,16 +13,18 @@ namespace {
 constexpr size_t kPreviewModuleLimit = 200000;
 }  // namespace
 
-void LSystemPanel::open(uint32_t plant, const std::shared_ptr<const lsystem::Grammar>& grammar,
-                        std::optional<int> derivationLength, const Vec3& position, const env::Environment* env) {
+void LSystemPanel::open(uint32_t plant, const std::shared_ptr<const lsystem::Grammar>& grammar, std::string text,
+                        std::optional<int> derivationLength, const Vec3& position, const session::Session* session,
+                        std::string description) {
   open_ = true;
+  description_ = std::move(description);
   plant_ = plant;
   source_ = grammar->source;
-  text_ = lsystem::grammarSourceText(grammar->source).value_or(std::string());
+  text_ = plantText_ = std::move(text);
   derivationLength_ = derivationLength;
-  steps_ = derivationLength.value_or(grammar->derivationLength);
+  steps_ = plantSteps_ = derivationLength.value_or(grammar->derivationLength);
   position_ = position;
-  env_ = env;
+  session_ = session;
   rebuild();
 }
 
@@ -41,7 +43,7 @@ void LSystemPanel::rebuild() {
     run.start.position = position_ + Vec3(0.6f, 0.0f, 0.0f);
     Timer timer;
     lsystem::LSystem ls(grammar, run);
-    while (!ls.finished() && ls.string().size() < kPreviewModuleLimit) ls.step(env_);
+    while (!ls.finished() && ls.string().size() < kPreviewModuleLimit) ls.step(&session_->environment());
     preview_ = ls.interpret();
     preview_->name = "preview";
     modules_ = ls.string().size();
@@ -52,14 +54,39 @@ void LSystemPanel::rebuild() {
   }
 }
 
-void LSystemPanel::draw() {
-  if (!open_) return;
+void LSystemPanel::applyFailed(const std::string& message) {
+  error_ = message;
+  diagnostic_.clear();
+}
+
+std::optional<session::SetGrammar> LSystemPanel::draw() {
+  if (!open_) return std::nullopt;
   ImGui::TextDisabled("%s", source_.c_str());
   bool changed = ImGui::InputTextMultiline("##grammar", &text_, ImVec2(-1, ImGui::GetTextLineHeight() * 16),
                                            ImGuiInputTextFlags_AllowTabInput);
   ImGui::SetNextItemWidth(120);
   changed |= ImGui::DragInt("derivation steps", &steps_, 0.2f, 0, 100000);
   if (changed) rebuild();
+  std::optional<session::SetGrammar> edit;
+  const bool edited = text_ != plantText_ || steps_ != plantSteps_;
+  ImGui::BeginDisabled(!edited || !preview_);
+  if (ImGui::Button("Apply to plant")) {
+    edit = session::SetGrammar{plant_, text_, std::nullopt};
+    if (steps_ != plantSteps_) edit->derivationLength = steps_;
+  }
+  ImGui::EndDisabled();
+  ImGui::SameLine();
+  ImGui::BeginDisabled(!edited);
+  if (ImGui::Button("Revert")) {
+    text_ = plantText_;
+    steps_ = plantSteps_;
+    rebuild();
+  }
+  ImGui::EndDisabled();
+  if (edited) {
+    ImGui::SameLine();
+    ImGui::TextDisabled(preview_ ? "edited: apply re-derives the plant" : "fix the errors to apply");
+  }
   if (!error_.empty()) {
     ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.45f, 0.4f, 1.0f));
     ImGui::TextWrapped("%s", error_.c_str());
@@ -70,6 +97,7 @@ void LSystemPanel::draw() {
                 preview_->leafCount(), deriveMs_);
     if (modules_ >= kPreviewModuleLimit) ImGui::TextDisabled("stopped at %zu modules", kPreviewModuleLimit);
   }
+  return edit;
 }
 
 }  // namespace tendril::studio

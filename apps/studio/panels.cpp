@@ -33,30 +33,6 @@ Vec3 degreesFromQuat(const Quat& q) {
   return Vec3(x, y, z) * (180.0f / kPi);
 }
 
-// One component of a p-graph and what it links to, as a tree (seed 004, Fig. 3): a link back
-// into a recursion shows the component's name and stops.
-void drawGraphComponent(const graph::Graph& g, const graph::Link& link, std::vector<bool>& onPath) {
-  if (link.target < 0 || size_t(link.target) >= g.components.size()) return;
-  const graph::Component& c = g.components[size_t(link.target)];
-  std::string label = fmt::format("{} ({}, {} link){}{}##c{}", c.name, graph::componentTypeName(c.type),
-                                  graph::linkTypeName(link.type), c.recursive ? ", recursion" : "",
-                                  c.depth > 0 ? fmt::format(" depth {}", c.depth) : std::string(), link.location);
-  if (onPath[size_t(link.target)]) {
-    ImGui::BulletText("%s (back to it)", c.name.c_str());
-    return;
-  }
-  if (c.links.empty()) {
-    ImGui::BulletText("%s", label.substr(0, label.find("##")).c_str());
-    return;
-  }
-  if (ImGui::TreeNodeEx(label.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
-    onPath[size_t(link.target)] = true;
-    for (const graph::Link& l : c.links) drawGraphComponent(g, l, onPath);
-    onPath[size_t(link.target)] = false;
-    ImGui::TreePop();
-  }
-}
-
 bool editVec3(const char* label, Vec3& v, float speed, const char* format = "%.3f") {
   float values[3] = {v.x(), v.y(), v.z()};
   ImGui::DragFloat3(label, values, speed, 0.0f, 0.0f, format);
@@ -129,6 +105,12 @@ void Studio::Impl::drawMenu() {
       fileAction = FileAction::Export;
       filePath = "plants.glb";
     }
+    if (ImGui::MenuItem("Import support mesh...")) {
+      fileAction = FileAction::Import;
+      filePath.clear();
+      importPosition = camera.target;
+      importScale = 1.0f;
+    }
     ImGui::Separator();
     if (ImGui::MenuItem("Quit", "Ctrl+Q")) window.requestClose();
     ImGui::EndMenu();
@@ -147,7 +129,7 @@ void Studio::Impl::drawMenu() {
 }
 
 void Studio::Impl::drawFileDialog() {
-  static const char* titles[] = {"", "Open", "Save session", "Export plants"};
+  static const char* titles[] = {"", "Open", "Save session", "Export plants", "Import support mesh"};
   if (fileAction == FileAction::None) return;
   const char* title = titles[int(fileAction)];
   if (!ImGui::IsPopupOpen(title)) ImGui::OpenPopup(title);
@@ -155,10 +137,17 @@ void Studio::Impl::drawFileDialog() {
   if (ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_NoSavedSettings)) {
     ImGui::TextUnformatted(fileAction == FileAction::Open     ? "Scene (.json) or session (.tses) file:"
                            : fileAction == FileAction::Save   ? "Session file (.tses):"
+                           : fileAction == FileAction::Import ? "Mesh file (.obj, .glb, .gltf, .ply, .stl, .fbx...):"
                                                               : "Plants file (.glb or .obj):");
     ImGui::SetNextItemWidth(-1);
     if (ImGui::IsWindowAppearing()) ImGui::SetKeyboardFocusHere();
     bool go = ImGui::InputText("##path", &filePath, ImGuiInputTextFlags_EnterReturnsTrue);
+    if (fileAction == FileAction::Import) {
+      ImGui::PushItemWidth(260);
+      editVec3("position (m)", importPosition, 0.01f);
+      ImGui::DragFloat("scale", &importScale, 0.01f, 1e-4f, 1e4f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
+      ImGui::PopItemWidth();
+    }
     go |= ImGui::Button("OK", ImVec2(100, 0));
     ImGui::SameLine();
     bool cancel = ImGui::Button("Cancel", ImVec2(100, 0));
@@ -166,6 +155,7 @@ void Studio::Impl::drawFileDialog() {
       try {
         if (fileAction == FileAction::Open) openFile(filePath);
         else if (fileAction == FileAction::Save) saveFile(filePath);
+        else if (fileAction == FileAction::Import) importMesh(filePath);
         else exportFile(filePath);
         cancel = true;
       } catch (const Error& e) {
@@ -219,7 +209,8 @@ void Studio::Impl::drawToolOptions() {
       ImGui::TextWrapped("Drag over surfaces to paint.");
       break;
     case Tool::MoveObstacle:
-      ImGui::TextWrapped("Drag an obstacle to move it across the view; Shift+drag turns it about the vertical.");
+      ImGui::TextWrapped("Drag an obstacle to move it across the view; Shift+drag turns it about the vertical; "
+                         "Ctrl+drag up or down scales it. The obstacle panel has exact fields.");
       break;
     case Tool::Light:
       ImGui::TextWrapped("Drag to turn the selected (or first) light; point lights move across the view.");
@@ -317,26 +308,50 @@ void Studio::Impl::drawPlantPanel(uint32_t p) {
   }
   if (spec.model == "lsystem") {
     if (const auto* params = spec.paramsAs<lsystem::LSystemParams>()) {
-      if (!lsystemPanel.isOpenFor(p)) lsystemPanel.open(p, params->grammar, params->derivationLength, spec.position,
-                                                      &session->environment());
-      if (ImGui::CollapsingHeader("L-system editor", ImGuiTreeNodeFlags_DefaultOpen)) lsystemPanel.draw();
-    }
-  }
-  if (spec.model == "graph") {
-    if (const auto* params = spec.paramsAs<graph::GraphPlantParams>(); params && params->graph) {
-      const graph::Graph& g = *params->graph;
-      if (ImGui::CollapsingHeader("p-graph (read-only)", ImGuiTreeNodeFlags_DefaultOpen)) {
-        ImGui::TextDisabled("%s: %zu components, seed %llu", g.source.c_str(), g.components.size(),
-                            (unsigned long long)g.seed);
-        std::vector<bool> onPath(g.components.size(), false);
-        if (ImGui::TreeNodeEx("camera (root)", ImGuiTreeNodeFlags_DefaultOpen)) {
-          for (const graph::Link& l : g.rootLinks) drawGraphComponent(g, l, onPath);
-          ImGui::TreePop();
+      const Json& d = session->plantDescription(p);
+      std::string key = d.dump();
+      if (!lsystemPanel.isOpenFor(p, key)) {
+        // An edited grammar's text is in the plant's scene-file object; else it is the file's.
+        std::string text = d.is_object() && d.contains("grammar_text") && d["grammar_text"].is_string()
+                               ? d["grammar_text"].get<std::string>()
+                               : lsystem::grammarSourceText(params->grammar->source).value_or(std::string());
+        lsystemPanel.open(p, params->grammar, std::move(text), params->derivationLength, spec.position, session.get(),
+                          std::move(key));
+      }
+      if (ImGui::CollapsingHeader("L-system editor", ImGuiTreeNodeFlags_DefaultOpen)) {
+        if (std::optional<session::SetGrammar> edit = lsystemPanel.draw()) {
+          if (!apply(*edit)) lsystemPanel.applyFailed(status);  // else it reopens on the new grammar
         }
       }
     }
   }
-  // Other models' settings cannot be changed live through the editor yet: shown as they are.
+  if (spec.model == "graph") {
+    if (const auto* params = spec.paramsAs<graph::GraphPlantParams>(); params && params->graph) {
+      const Json& d = session->plantDescription(p);
+      std::string key = d.dump();
+      if (!graphPanel.isOpenFor(p, key)) {
+        // An edited graph is in the plant's scene-file object; else it is the file's.
+        Json document;
+        if (d.is_object() && d.contains("graph_document")) document = d["graph_document"];
+        else {
+          try {
+            document = readJsonFile(params->graph->source);
+          } catch (const Error& e) {
+            status = e.what();
+            statusIsError = true;
+          }
+        }
+        graphPanel.open(p, std::move(document), params->graph->source, std::move(key));
+      }
+      if (ImGui::CollapsingHeader("p-graph editor", ImGuiTreeNodeFlags_DefaultOpen)) {
+        if (d.is_object() && d.contains("overrides"))
+          ImGui::TextDisabled("the plant's \"overrides\" still replace what they name");
+        if (std::optional<session::SetGraph> edit = graphPanel.draw())
+          if (!apply(*edit)) graphPanel.applyFailed(status);  // else it reopens on the new graph
+      }
+    }
+  }
+  // The plant's scene-file object as it is now (edits above rewrite it).
   if (ImGui::CollapsingHeader("Plant settings (read-only)")) {
     const Json& description = session->plantDescription(p);
     std::string text = description.is_null() ? std::string("(added from code)") : description.dump(2);
@@ -402,17 +417,31 @@ void Studio::Impl::drawObstaclePanel(uint32_t id) {
   const env::ObstacleInfo& info = env.obstacle(id);
   ImGui::Text("Obstacle %s (%s)", info.name.c_str(), env::obstacleKindName(info.kind));
   ImGui::Text("%zu triangles%s", info.triangles, info.closed ? ", closed" : "");
+  if (const std::string& path = session->obstaclePath(id); !path.empty()) ImGui::TextWrapped("imported from %s", path.c_str());
   Vec3 position = info.worldFromLocal.translation;
   Vec3 rotation = degreesFromQuat(info.worldFromLocal.rotation);
+  Vec3 scale = session->obstacleScale(id);
   ImGui::PushItemWidth(220);
   bool moved = editVec3("position (m)", position, 0.01f);
   bool turned = editVec3("rotation (deg)", rotation, 0.5f, "%.1f");
+  bool scaled = editVec3("scale", scale, 0.005f);
+  float uniform = std::cbrt(scale.x() * scale.y() * scale.z());
+  ImGui::DragFloat("uniform scale", &uniform, 0.005f, 1e-4f, 1e4f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
+  if (ImGui::IsItemDeactivatedAfterEdit()) {
+    // Keeps the proportions of a non-uniform scale.
+    const float now = std::cbrt(session->obstacleScale(id).prod());
+    scale = session->obstacleScale(id) * (uniform / std::max(now, 1e-6f));
+    scaled = true;
+  }
   ImGui::PopItemWidth();
-  if (moved || turned) {
+  ImGui::TextDisabled("scale: the mesh in its own frame, 1 = as read");
+  if (moved || turned || scaled) {
     RigidTransform t = info.worldFromLocal;
     t.translation = position;
     if (turned) t.rotation = quatFromEulerDegrees(rotation);
-    apply(session::MoveObstacle{id, t});
+    std::optional<Vec3> newScale;
+    if (scaled) newScale = scale.cwiseMax(Vec3::Constant(1e-4f)).cwiseMin(Vec3::Constant(1e4f));
+    apply(session::MoveObstacle{id, t, newScale});
   }
 }
 

@@ -86,7 +86,9 @@ void Studio::Impl::openFile(const std::filesystem::path& path) {
   script.reset();  // a script replays on the session it was started with
   nextScriptEdit = 0;
   lsystemPanel.close();
+  graphPanel.close();
   meshesChanged = true;
+  obstacleRevision = session->obstacleRevision();
   cameraFramed = false;
   nextSeed = session->plantCount() + 1;
   status = fmt::format("opened {}", path.string());
@@ -109,6 +111,18 @@ void Studio::Impl::exportFile(const std::filesystem::path& path) {
   else if (ext == ".obj") io::writeObj(scene, path);
   else throw Error(path.string(), "", "expected a .glb or .obj file name");
   status = fmt::format("exported {} plant(s) to {}", scene.plants.size(), path.string());
+  statusIsError = false;
+}
+
+void Studio::Impl::importMesh(const std::filesystem::path& path) {
+  session::AddObstacle edit;
+  // The path box is relative to the working directory; edits resolve against the scene's.
+  edit.path = std::filesystem::absolute(path).lexically_normal().string();
+  edit.worldFromLocal.translation = importPosition;
+  edit.scale = Vec3::Constant(importScale);
+  editor->apply(edit);  // an Error (the file's) reaches the dialog
+  selection = {Selection::Kind::Obstacle, uint32_t(session->environment().obstacleCount() - 1), std::nullopt};
+  status = fmt::format("imported {} as obstacle {}", path.string(), selection.index);
   statusIsError = false;
 }
 
@@ -339,6 +353,7 @@ void Studio::Impl::beginGesture(const Vec2& pixel) {
       gesture.obstacle = hit->obstacle;
       gesture.anchor = hit->point;
       gesture.original = gesture.preview = session->environment().obstacle(hit->obstacle).worldFromLocal;
+      gesture.originalScale = gesture.previewScale = session->obstacleScale(hit->obstacle);
       return;
     }
     case Tool::Light: {
@@ -396,7 +411,16 @@ void Studio::Impl::moveGesture(const Vec2& pixel) {
       Vec3 a = dragPoint(camera, viewportWidth, viewportHeight, gesture.start, gesture.anchor);
       Vec3 b = dragPoint(camera, viewportWidth, viewportHeight, pixel, gesture.anchor);
       gesture.preview = gesture.original;
-      if (ImGui::GetIO().KeyShift) {
+      gesture.previewScale = gesture.originalScale;
+      if (ImGui::GetIO().KeyCtrl) {
+        // Ctrl: scale about the obstacle's own origin, doubling per half viewport height upward.
+        const float factor = std::exp2((gesture.start.y() - pixel.y()) / float(std::max(1, viewportHeight)) * 2.0f);
+        gesture.previewScale = (gesture.originalScale * factor).cwiseMax(Vec3::Constant(1e-4f)).cwiseMin(Vec3::Constant(1e4f));
+        if (gesture.currentMesh.positions.empty()) gesture.currentMesh = session->environment().obstacleMesh(gesture.obstacle);
+        gesture.previewMesh = gesture.currentMesh;
+        const Vec3 ratio = gesture.previewScale.cwiseQuotient(gesture.originalScale);
+        for (Vec3& v : gesture.previewMesh.positions) v = v.cwiseProduct(ratio);
+      } else if (ImGui::GetIO().KeyShift) {
         // Shift: turn about the vertical axis through the grabbed point.
         float angle = (pixel.x() - gesture.start.x()) / float(std::max(1, viewportHeight)) * kPi;
         Quat turn(Eigen::AngleAxisf(angle, Vec3::UnitY()));
@@ -440,8 +464,10 @@ void Studio::Impl::endGesture(const Vec2& pixel) {
       if (!g.stroke.points.empty()) apply(session::PaintStroke{g.stroke});
       return;
     case Tool::MoveObstacle:
-      if ((g.preview.translation - g.original.translation).norm() > 0.0f ||
-          !g.preview.rotation.isApprox(g.original.rotation))
+      if (g.previewScale != g.originalScale)
+        apply(session::MoveObstacle{g.obstacle, g.original, g.previewScale});
+      else if ((g.preview.translation - g.original.translation).norm() > 0.0f ||
+               !g.preview.rotation.isApprox(g.original.rotation))
         apply(session::MoveObstacle{g.obstacle, g.preview});
       return;
     case Tool::Light:
@@ -525,8 +551,13 @@ void Studio::Impl::drawViewport() {
   }
   render::RenderScene& scene = view.mutableScene();
   // Gesture previews: the obstacle or light where it will go, the stroke being painted.
-  if (gesture.active && gesture.tool == Tool::MoveObstacle && gesture.obstacle < scene.obstacles.size())
+  if (gesture.active && gesture.tool == Tool::MoveObstacle && gesture.obstacle < scene.obstacles.size()) {
     scene.obstacles[gesture.obstacle].worldFromLocal = gesture.preview;
+    if (gesture.previewScale != gesture.originalScale) {
+      scene.obstacles[gesture.obstacle].mesh = &gesture.previewMesh;
+      scene.obstacles[gesture.obstacle].meshKey = 0;  // changes while the gesture goes on
+    }
+  }
   if (gesture.active && gesture.tool == Tool::Light && gesture.light < scene.lights.size())
     scene.lights[gesture.light] = gesture.lightPreview;
   if (gesture.active && !gesture.stroke.points.empty()) scene.strokes.push_back(gesture.stroke);
@@ -558,6 +589,10 @@ int Studio::Impl::run() {
     handleKeys();
     handleViewportInput();
     Timer updateTimer;
+    if (session->obstacleRevision() != obstacleRevision) {  // imported, rescaled, or undone
+      meshesChanged = true;
+      obstacleRevision = session->obstacleRevision();
+    }
     view.update(*session, selection, meshesChanged);
     meshesChanged = false;
     updateStress();

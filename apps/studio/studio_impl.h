@@ -2,9 +2,11 @@
 // ImGui panels). Private to apps/studio.
 #pragma once
 
+#include "graph_panel.h"
 #include "lsystem_panel.h"
 #include "studio.h"
 
+#include "tendril/core/triangle_mesh.h"
 #include "tendril/session/edit.h"
 #include "tendril/session/edit_script.h"
 #include "tendril/session/session.h"
@@ -28,11 +30,15 @@ struct Gesture {
   env::Stroke stroke;
   uint32_t obstacle = 0;
   RigidTransform original, preview;
+  // Move obstacle with Ctrl: the scale before and during the gesture, and the obstacle's mesh
+  // at the previewed scale (drawn instead of its own until the gesture ends).
+  Vec3 originalScale = Vec3::Ones(), previewScale = Vec3::Ones();
+  TriangleMesh currentMesh, previewMesh;
   uint32_t light = 0;
   env::Light lightPreview;
 };
 
-enum class FileAction { None, Open, Save, Export };
+enum class FileAction { None, Open, Save, Export, Import };
 
 struct Studio::Impl {
   explicit Impl(const StudioOptions& options);
@@ -42,6 +48,8 @@ struct Studio::Impl {
   void openFile(const std::filesystem::path& path);
   void saveFile(const std::filesystem::path& path);
   void exportFile(const std::filesystem::path& path);
+  // File > Import support mesh: the mesh as a new obstacle (an AddObstacle edit).
+  void importMesh(const std::filesystem::path& path);
   // Applies an edit through the library's Editor; an Error becomes the status line.
   bool apply(const session::Edit& edit);
   void undo();
@@ -103,6 +111,7 @@ struct Studio::Impl {
   bool playing = true;
   int speed = 1;
   bool meshesChanged = true;
+  uint64_t obstacleRevision = 0;  // the session's when the viewport last fetched obstacle meshes
   FrameTiming timing;
   double lastStepMs = 0.0;
   uint64_t frameCount = 0;
@@ -122,7 +131,10 @@ struct Studio::Impl {
   // Panels.
   FileAction fileAction = FileAction::None;
   std::string filePath;
+  Vec3 importPosition = Vec3::Zero();  // File > Import: where the mesh's origin goes (m)
+  float importScale = 1.0f;
   LSystemPanel lsystemPanel;
+  GraphPanel graphPanel;
 };
 
 inline constexpr const char* kSeedModels[] = {"particles", "climb", "lsystem", "graph"};

@@ -4,6 +4,7 @@
 #include "tendril/session/edit.h"
 #include "tendril/session/edit_script.h"
 #include "tendril/session/session.h"
+#include "tendril/session/session_file.h"
 
 #include <gtest/gtest.h>
 
@@ -70,6 +71,17 @@ int greenViewportPixels(const io::Image& image) {
       green += p[1] > p[0] + 12 && p[1] > p[2] + 12 && p[2] * 5 < p[1] * 4;
     }
   return green;
+}
+
+// Red pixels inside the viewport (the imported post of import.json).
+int redViewportPixels(const io::Image& image) {
+  int red = 0;
+  for (int y = 30; y < image.height - 70; ++y)
+    for (int x = 290; x < image.width - 380; ++x) {
+      const uint8_t* p = image.pixel(x, y);
+      red += p[0] > p[1] + 40 && p[0] > p[2] + 40;
+    }
+  return red;
 }
 
 // The segment count the studio reports in its last line ("..., step N, M segments").
@@ -178,6 +190,92 @@ TEST(StudioHeadless, SavedSessionReopensWhereItStopped) {
       << err;
   EXPECT_EQ(reportedSegments(err), before) << err;
   EXPECT_NE(err.find("step 120,"), std::string::npos) << err;
+}
+
+TEST(StudioHeadless, ImportsAndScalesASupportMesh) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  const fs::path scene = kTestDir / "wall.json", saved = dir / "import.tses";
+  std::string out, err;
+  ASSERT_EQ(runStudio(dir,
+                      quoted(scene) + " --script " + quoted(kTestDir / "import.json") +
+                          " --frames 20 --speed 2 --size 1000x700 --select obstacle:2 --screenshot " +
+                          quoted(dir / "import.png") + " --save-session " + quoted(saved),
+                      true, &out, &err),
+            0)
+      << err;
+  ASSERT_EQ(runStudio(dir, quoted(scene) + " --frames 0 --size 1000x700 --screenshot " + quoted(dir / "plain.png"),
+                      true, &out, &err),
+            0)
+      << err;
+  const int imported = redViewportPixels(io::readImage(dir / "import.png"));
+  const int plain = redViewportPixels(io::readImage(dir / "plain.png"));
+  EXPECT_GT(imported, 600) << "the imported red post should show in the viewport (behind the climber)";
+  EXPECT_LT(plain, 100);
+
+  // The session keeps the imported, rescaled post; the climber seeded at its foot went up it.
+  session::LoadedSession loaded = session::loadSession(saved);
+  const session::Session& s = *loaded.session;
+  ASSERT_EQ(s.environment().obstacleCount(), 3u);
+  EXPECT_EQ(s.environment().obstacle(2).name, "post");
+  EXPECT_EQ(s.obstaclePath(2), "post.obj");
+  EXPECT_EQ(s.obstacleScale(2), Vec3(1, 1.3f, 1));
+  EXPECT_NEAR(s.environment().obstacle(2).worldBounds.max.y(), 1.3f, 1e-5f);
+  ASSERT_EQ(s.plantCount(), 1u);
+  float top = 0.0f;
+  const plant::PlantModel climber = s.plants()[0];
+  for (size_t n = 0; n < climber.nodeCount(); ++n) top = std::max(top, climber.tip(n).y());
+  EXPECT_GT(top, 0.1f);
+
+  // A mesh file that is not there: exit 1, one line naming it.
+  EXPECT_EQ(runStudio(dir,
+                      quoted(scene) + " --script " + quoted(kTestDir / "import-missing.json") +
+                          " --frames 2 --screenshot " + quoted(dir / "missing.png"),
+                      true, &out, &err),
+            1);
+  EXPECT_NE(err.find("no-such-post.obj"), std::string::npos) << err;
+  EXPECT_NE(err.find("/edits/0"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir / "missing.png"));
+}
+
+// The p-graph and L-system editors' edits (set_graph, set_grammar) replayed headless: the
+// edited graph plant shows its six bigger buds, and the session holds both edits.
+TEST(StudioHeadless, GraphAndGrammarEditsReplay) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  const fs::path scene = kTestDir / "fig2.json", saved = dir / "edits.tses";
+  std::string out, editedErr, plainErr;
+  ASSERT_EQ(runStudio(dir,
+                      quoted(scene) + " --script " + quoted(kTestDir / "plant-edits.json") +
+                          " --frames 8 --size 1000x700 --select plant:0 --screenshot " + quoted(dir / "edited.png") +
+                          " --save-session " + quoted(saved),
+                      true, &out, &editedErr),
+            0)
+      << editedErr;
+  ASSERT_EQ(runStudio(dir,
+                      quoted(scene) + " --frames 8 --size 1000x700 --select plant:0 --screenshot " +
+                          quoted(dir / "plain.png"),
+                      true, &out, &plainErr),
+            0)
+      << plainErr;
+  const int edited = redViewportPixels(io::readImage(dir / "edited.png"));
+  const int plain = redViewportPixels(io::readImage(dir / "plain.png"));
+  EXPECT_GT(plain, 50) << "fig. 2's three buds";
+  EXPECT_GT(edited, 3 * plain) << "six buds, each about twice as large";
+
+  session::LoadedSession loaded = session::loadSession(saved);
+  const session::Session& s = *loaded.session;
+  ASSERT_EQ(s.plantCount(), 2u);
+  EXPECT_EQ(s.plantDescription(0)["graph_document"]["components"][1]["params"]["count"], 6);
+  EXPECT_EQ(s.plants()[0].primitives.size(), 6u);
+  EXPECT_TRUE(s.plantDescription(1).contains("grammar_text"));
+  EXPECT_EQ(s.plantDescription(1)["derivation_length"], 3);
+  // The studio's plants are those the library's runner makes from the same script.
+  auto reference = session::Session::open(scene);
+  session::Editor editor(*reference);
+  session::runEditScript(editor, session::loadEditScript(kTestDir / "plant-edits.json"), 8);
+  EXPECT_EQ(reportedSegments(editedErr), long(reference->segmentCount())) << editedErr;
+  EXPECT_EQ(reference->stateHash(), s.stateHash());
 }
 
 }  // namespace
