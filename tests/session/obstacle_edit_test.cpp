@@ -3,6 +3,8 @@
 // files keep them, and every model treats them exactly as it treats the same mesh given in the
 // scene file.
 #include "session/session_test_util.h"
+#include "support/run_command.h"
+#include "tendril/core/archive.h"
 #include "tendril/core/error.h"
 #include "tendril/plant/plant_model.h"
 #include "tendril/session/edit.h"
@@ -305,6 +307,72 @@ TEST(ObstacleEdits, JsonFormsRoundTripAndAreChecked) {
   EXPECT_NE(error(R"({"at_step": 0, "edit": "add_obstacle", "path": "a.obj", "colour": [1, 1, 1]})")
                 .find("edits.json:/edits/0/colour"),
             std::string::npos);
+}
+
+// Session states written before obstacle scales and imports (version 1: transforms only) are
+// still read, with every obstacle at scale 1.
+TEST(ObstacleEdits, VersionOneStatesAreStillRead) {
+  auto a = test::makeSession(test::sessionScene(test::kClimbPlant));
+  for (int i = 0; i < 5; ++i) a->step();
+  const std::vector<uint8_t> v2 = a->saveState();
+  // Rewrite the state as version 1 wrote it: no scale after each transform, no import list.
+  ArchiveReader in(v2, "v2");
+  ArchiveWriter out;
+  out.u32(in.u32());  // tag
+  EXPECT_EQ(in.u32(), 2u);
+  out.u32(1);
+  out.u32(in.u32());  // steps
+  const uint64_t plants = in.u64();
+  out.u64(plants);
+  for (uint64_t i = 0; i < 2 * plants; ++i) out.string(in.string());
+  const uint64_t obstacles = in.u64();
+  out.u64(obstacles);
+  for (uint64_t o = 0; o < obstacles; ++o) {
+    out.value(in.value<RigidTransform>());
+    EXPECT_EQ(in.value<Vec3>(), Vec3::Ones());
+  }
+  EXPECT_EQ(in.u64(), 0u);  // imported obstacles
+  std::vector<uint8_t> v1 = out.take();
+  v1.insert(v1.end(), v2.begin() + std::ptrdiff_t(in.position()), v2.end());
+
+  auto b = test::makeSession(test::sessionScene(test::kClimbPlant));
+  b->loadState(v1, "v1");
+  EXPECT_EQ(b->stateHash(), a->stateHash());
+  EXPECT_EQ(b->saveState(), v2);
+  v1[4] = 3;  // an unknown version is refused
+  EXPECT_THROW(b->loadState(v1, "v1"), Error);
+}
+
+// `tendril edit` replays an import; a missing mesh is a one-line error naming it (exit 2).
+TEST(ObstacleEdits, CliEditImportsAndNamesAMissingMesh) {
+  auto dir = test::scratchDir();
+  const fs::path wall = writeWall(dir);
+  const std::string scene = test::quoted(test::sourceDir() / "examples/scenes/edit-stage.json");
+  test::writeText(dir / "import.json",
+                  fmt::format(R"({{"tendril_edits": 1, "edits": [{{"at_step": 0, "edit": "add_obstacle",
+                      "path": "{}", "translation": [0, 0, 0.6]}}]}})",
+                              wall.string()));
+  auto ok = test::runTendril("edit " + scene + " --script " + test::quoted(dir / "import.json") + " --steps 3 -o " +
+                                 test::quoted(dir / "a") + " --save " + test::quoted(dir / "a.tses") + " -q",
+                             dir);
+  ASSERT_EQ(ok.exitCode, 0) << ok.err;
+  LoadedSession loaded = loadSession(dir / "a.tses");
+  const size_t sceneObstacles = Session::open(test::sourceDir() / "examples/scenes/edit-stage.json")
+                                    ->environment()
+                                    .obstacleCount();
+  EXPECT_EQ(loaded.session->environment().obstacleCount(), sceneObstacles + 1);
+
+  test::writeText(dir / "missing.json", R"({"tendril_edits": 1, "edits": [{"at_step": 0, "edit": "add_obstacle",
+                                            "path": "/no/such/post.obj"}]})");
+  auto bad = test::runTendril("edit " + scene + " --script " + test::quoted(dir / "missing.json") + " -o " +
+                                  test::quoted(dir / "b"),
+                              dir);
+  EXPECT_EQ(bad.exitCode, 2) << bad.err;
+  EXPECT_NE(bad.err.find("/no/such/post.obj"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find((dir / "missing.json").string() + ":/edits/0: add_obstacle at step 0"), std::string::npos)
+      << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_FALSE(fs::exists(dir / "b/plant.glb"));  // nothing written
 }
 
 }  // namespace
