@@ -9,6 +9,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -58,7 +59,13 @@ struct Environment::ObstacleData {
   RTCGeometry geometry = nullptr;
   bool moved = true;
   mutable std::once_flag sdfOnce;
+  mutable std::atomic<bool> sdfReady{false};  // the grid is built: the query's fast path
   mutable SdfGrid sdf;
+  // The transform as matrices for the distance queries (a quaternion rotation costs twice
+  // the multiplies of a matrix one): local = localRotation · world + localTranslation.
+  Mat3 localRotation = Mat3::Identity();
+  Vec3 localTranslation = Vec3::Zero();
+  Mat3 worldRotation = Mat3::Identity();
 
   ~ObstacleData() {
     if (geometry) rtcReleaseGeometry(geometry);
@@ -78,6 +85,9 @@ struct Environment::ObstacleData {
     }
     info.worldBounds = Bounds3();
     for (size_t i = 0; i + 1 < world.size(); ++i) info.worldBounds.extend(world[i]);
+    worldRotation = t.rotation.normalized().toRotationMatrix();
+    localRotation = worldRotation.transpose();
+    localTranslation = -(localRotation * t.translation);
   }
 };
 
@@ -573,43 +583,78 @@ void Environment::buildSdf(ObstacleData& o) const {
   rtcReleaseScene(scene);
 }
 
-float Environment::obstacleSdf(const ObstacleData& o, const Vec3& worldP, Vec3* gradient) const {
-  // Built on first use. The build is a parallel loop; isolating it keeps the waiting thread
-  // from picking up another task of an enclosing parallel loop, which could enter this same
-  // call_once recursively.
-  std::call_once(o.sdfOnce, [&] { tbb::this_task_arena::isolate([&] { buildSdf(const_cast<ObstacleData&>(o)); }); });
-  Vec3 local = o.info.worldFromLocal.inverse().applyPoint(worldP);
-  if (!gradient) return o.sdf.sample(local);
-  Vec3 g;
-  float d = o.sdf.sampleWithGradient(local, &g);
-  float len = g.norm();
-  *gradient = len > 1e-12f ? o.info.worldFromLocal.applyVector(g / len) : Vec3::Zero();
-  return d;
+const SdfGrid& Environment::distanceField(const ObstacleData& o) const {
+  if (!o.sdfReady.load(std::memory_order_acquire)) {
+    // Built on first use. The build is a parallel loop; isolating it keeps the waiting thread
+    // from picking up another task of an enclosing parallel loop, which could enter this same
+    // call_once recursively.
+    std::call_once(o.sdfOnce, [&] {
+      tbb::this_task_arena::isolate([&] { buildSdf(const_cast<ObstacleData&>(o)); });
+      o.sdfReady.store(true, std::memory_order_release);
+    });
+  }
+  return o.sdf;
 }
 
 void Environment::buildDistanceFields() const {
-  for (const auto& o : obstacles_) {
-    Vec3 g;
-    obstacleSdf(*o, o->info.worldBounds.center(), &g);
-  }
+  for (const auto& o : obstacles_) distanceField(*o);
 }
 
 float Environment::signedDistance(const Vec3& p) const { return signedDistance(p, nullptr); }
 
 float Environment::signedDistance(const Vec3& p, Vec3* gradient) const {
-  float best = kInf;
+  // The minimum over the obstacles whose bounds are no farther than the best distance so far.
+  // The obstacle nearest by its bounds is sampled first: a point on a wall then skips the
+  // ground and everything else (most collision queries are such points).
+  const size_t n = obstacles_.size();
   if (gradient) *gradient = Vec3::Zero();
-  for (const auto& o : obstacles_) {
-    // Skip obstacles whose bounds are already farther than the best distance.
-    const Bounds3& b = o->info.worldBounds;
-    Vec3 outside = (b.min - p).cwiseMax(p - b.max).cwiseMax(Vec3::Zero());
-    if (outside.norm() > best) continue;
+  if (n == 0) return kInf;
+  constexpr size_t kKept = 16;  // bound distances kept for the second loop
+  float kept[kKept];
+  auto boundsDistance2 = [&](size_t k) {
+    if (k < kKept) return kept[k];
+    const Bounds3& b = obstacles_[k]->info.worldBounds;
+    return (b.min - p).cwiseMax(p - b.max).cwiseMax(Vec3::Zero()).squaredNorm();
+  };
+  size_t first = 0;
+  float firstDistance2 = kInf;
+  for (size_t k = 0; k < n; ++k) {
+    const Bounds3& b = obstacles_[k]->info.worldBounds;
+    const float d2 = (b.min - p).cwiseMax(p - b.max).cwiseMax(Vec3::Zero()).squaredNorm();
+    if (k < kKept) kept[k] = d2;
+    if (d2 < firstDistance2) {
+      firstDistance2 = d2;
+      first = k;
+    }
+  }
+  float best = kInf;
+  const ObstacleData* bestObstacle = nullptr;
+  Vec3 bestGradient = Vec3::Zero();  // in bestObstacle's frame, unnormalised
+  for (size_t visit = 0; visit <= n; ++visit) {
+    // The nearest by its bounds, then the others in order unless past the best distance (or
+    // inside an obstacle: every bound is farther than that).
+    size_t k;
+    if (visit == 0) {
+      if (!(firstDistance2 < kInf)) continue;
+      k = first;
+    } else {
+      k = visit - 1;
+      if (k == first || best < 0.0f || boundsDistance2(k) > best * best) continue;
+    }
+    const ObstacleData& o = *obstacles_[k];
+    const SdfGrid& grid = distanceField(o);
+    const Vec3 local = o.localRotation * p + o.localTranslation;
     Vec3 g;
-    float d = obstacleSdf(*o, p, gradient ? &g : nullptr);
+    const float d = gradient ? grid.sampleWithGradient(local, &g) : grid.sample(local);
     if (d < best) {
       best = d;
-      if (gradient) *gradient = g;
+      bestObstacle = &o;
+      if (gradient) bestGradient = g;
     }
+  }
+  if (gradient && bestObstacle) {
+    const float len = bestGradient.norm();
+    if (len > 1e-12f) *gradient = bestObstacle->worldRotation * (bestGradient / len);
   }
   return best;
 }

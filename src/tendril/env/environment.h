@@ -22,6 +22,8 @@
 
 namespace tendril::env {
 
+class SdfGrid;
+
 enum class ObstacleKind { Plane, Box, Sphere, Cylinder, Wall, Mesh };
 
 struct ObstacleDef {
@@ -171,7 +173,8 @@ class Environment {
   static float walkTowardClosest(const ObstacleData& o, const Vec3& p, uint32_t start);
   std::optional<SurfacePoint> closest(const Vec3& p, float radius, const Vec3* direction, float cosLimit,
                                       const SurfacePoint* hint = nullptr) const;
-  float obstacleSdf(const ObstacleData& o, const Vec3& worldP, Vec3* gradient) const;
+  // o's distance grid, built on first use (thread-safe).
+  const SdfGrid& distanceField(const ObstacleData& o) const;
 
   std::vector<std::unique_ptr<ObstacleData>> obstacles_;
   std::vector<Light> lights_;
