@@ -2,6 +2,7 @@
 
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
+#include "tendril/core/parallel.h"
 #include "tendril/core/timer.h"
 
 #include <fmt/format.h>
@@ -327,11 +328,11 @@ std::vector<plant::PlantModel> ParticleWorld::snapshots() const {
     const uint32_t p = plant_[leaves_[k].particle];
     if (p < plants_.size()) parts[p].attachedLeaves.push_back(k);
   }
-  // Every particle belongs to one plant, so one map serves them all.
+  // Every particle belongs to one plant, so one map serves them all, and the plants, which
+  // read and write only their own particles' entries, are taken in parallel.
   std::vector<int32_t> node(capacity(), -1);
-  std::vector<plant::PlantModel> out;
-  out.reserve(plants_.size());
-  for (uint32_t p = 0; p < plants_.size(); ++p) out.push_back(snapshotFrom(p, parts[p], node));
+  std::vector<plant::PlantModel> out(plants_.size());
+  parallelFor(0, plants_.size(), [&](size_t p) { out[p] = snapshotFrom(uint32_t(p), parts[p], node); }, 1);
   return out;
 }
 
