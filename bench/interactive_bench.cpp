@@ -4,11 +4,21 @@
 // bench/scenes/interactive-*.json (fast-growing ivies, so the setup takes a few hundred
 // steps). Results and commands: bench/README.md.
 #include "tendril/core/timer.h"
+#include "tendril/mesh/leaf_mesh.h"
 #include "tendril/particles/world.h"
 #include "tendril/render/plant_instances.h"
 #include "tendril/session/session.h"
 
 #include <benchmark/benchmark.h>
+
+// Under `valgrind --tool=callgrind --instr-atstart=no --collect-atstart=no`, only the timed
+// frames are counted (the setup runs uninstrumented); no-ops otherwise.
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#else
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_TOGGLE_COLLECT
+#endif
 
 #include <time.h>
 
@@ -59,25 +69,31 @@ void BM_InteractiveFrame(benchmark::State& state) {
   session::Session& s = *g.session;
   std::vector<render::BranchInstance> branches;
   std::vector<render::LeafInstance> leaves;
+  std::vector<render::PlantView> views;
+  std::vector<render::PlantMaterial> materials;
   std::vector<double> total, stepMs, snapshotMs, instanceMs, cpu;
   size_t nodes = 0, leafCount = 0;
+  CALLGRIND_START_INSTRUMENTATION;
   for (auto _ : state) {
     const double cpu0 = processCpuSeconds();
     Timer t;
+    CALLGRIND_TOGGLE_COLLECT;
     s.step();
     const double step = t.seconds();
     std::vector<plant::PlantModel> plants = s.plants();
     const double snapshot = t.seconds() - step;
-    branches.clear();
-    leaves.clear();
-    for (const plant::PlantModel& p : plants) {
-      render::PlantView view;
-      view.model = &p;
-      render::appendBranchInstances(view, 0.0f, Vec3::Constant(0.5f), branches);
-      std::vector<float> layer(p.leafShapes.size(), 0.0f), aspect(p.leafShapes.size(), 1.0f);
-      std::vector<Vec3> tint(p.leafShapes.size(), Vec3::Ones());
-      render::appendLeafInstances(view, layer, aspect, tint, leaves);
+    // As the renderer does it: materials resolved first, then every plant's instances at once.
+    views.assign(plants.size(), render::PlantView{});
+    materials.resize(plants.size());
+    for (size_t i = 0; i < plants.size(); ++i) {
+      views[i].model = &plants[i];
+      size_t shapes = mesh::leafShapeCount(plants[i]);
+      materials[i].shapeLayer.assign(shapes, 0.0f);
+      materials[i].shapeAspect.assign(shapes, 1.0f);
+      materials[i].shapeTint.assign(shapes, Vec3::Ones());
     }
+    render::buildPlantInstances(views, materials, branches, leaves);
+    CALLGRIND_TOGGLE_COLLECT;
     const double seconds = t.seconds();
     cpu.push_back(processCpuSeconds() - cpu0);
     state.SetIterationTime(seconds);

@@ -1,10 +1,12 @@
 #include "tendril/render/plant_instances.h"
 
 #include "support/synthetic_plants.h"
+#include "tendril/core/parallel.h"
 #include "tendril/render/texture_layers.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -111,6 +113,56 @@ TEST(RenderInstances, LeafBladesFollowThePlantModelFrame) {
     EXPECT_EQ(out[i].halfWidth.w, layer[s]);
     EXPECT_EQ(xyz(out[i].tint), tint[s]);
   }
+}
+
+TEST(RenderInstances, AllPlantsAtOnceEqualPlantAfterPlantForAnyThreadCount) {
+  // Plants of different sizes and materials, one view without a model, one with stress and a
+  // selection: the parallel build gives the sequential appends' bytes.
+  std::vector<plant::PlantModel> plants;
+  for (int i = 0; i < 9; ++i) {
+    plants.push_back(i % 3 == 0 ? meshtest::syntheticIvy(200 + 150 * size_t(i), uint64_t(i) + 1)
+                                : meshtest::arcChain(10 + i, 0.3f + 0.05f * float(i)));
+    if (plants.back().leafCount() == 0) meshtest::addLeaves(plants.back(), 2, 0.05f);
+  }
+  std::vector<float> stress(plants[4].nodeCount());
+  for (size_t i = 0; i < stress.size(); ++i) stress[i] = float(i) / float(stress.size());
+  std::vector<PlantView> views(plants.size() + 1);
+  std::vector<PlantMaterial> materials(views.size());
+  for (size_t i = 0; i < plants.size(); ++i) {
+    views[i + 1].model = &plants[i];
+    PlantMaterial& m = materials[i + 1];
+    m.barkLayer = float(i % 2);
+    m.barkMean = Vec3(0.4f, 0.5f, 0.3f + 0.01f * float(i));
+    size_t shapes = 0;
+    for (uint16_t s : plants[i].leafShape) shapes = std::max(shapes, size_t(s) + 1);
+    for (size_t s = 0; s < shapes; ++s) {
+      m.shapeLayer.push_back(float(s + i));
+      m.shapeAspect.push_back(0.5f + 0.1f * float(s));
+      m.shapeTint.push_back(Vec3(1.0f, 0.9f, 0.1f * float(i)));
+    }
+  }
+  views[5].stress = stress;
+  views[3].selected = {2, 5};
+  std::vector<BranchInstance> wantBranches;
+  std::vector<LeafInstance> wantLeaves;
+  for (size_t i = 1; i < views.size(); ++i) {
+    const PlantMaterial& m = materials[i];
+    appendBranchInstances(views[i], m.barkLayer, m.barkMean, wantBranches);
+    appendLeafInstances(views[i], m.shapeLayer, m.shapeAspect, m.shapeTint, wantLeaves);
+  }
+  for (int threads : {1, 2}) {
+    setThreadCount(threads);
+    std::vector<BranchInstance> gotBranches(3);  // replaced, not appended to
+    std::vector<LeafInstance> gotLeaves(5);
+    buildPlantInstances(views, materials, gotBranches, gotLeaves);
+    ASSERT_EQ(gotBranches.size(), wantBranches.size()) << threads;
+    ASSERT_EQ(gotLeaves.size(), wantLeaves.size()) << threads;
+    EXPECT_EQ(std::memcmp(gotBranches.data(), wantBranches.data(), wantBranches.size() * sizeof(BranchInstance)), 0)
+        << threads;
+    EXPECT_EQ(std::memcmp(gotLeaves.data(), wantLeaves.data(), wantLeaves.size() * sizeof(LeafInstance)), 0)
+        << threads;
+  }
+  setThreadCount(0);
 }
 
 TEST(RenderInstances, PrimitivesArePlacedByTheirNodeAndGroupedByMesh) {

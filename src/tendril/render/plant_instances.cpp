@@ -1,5 +1,6 @@
 #include "tendril/render/plant_instances.h"
 
+#include "tendril/core/parallel.h"
 #include "tendril/mesh/primitive_mesh.h"
 
 #include <algorithm>
@@ -49,16 +50,16 @@ Vec3 stressColor(float stress) {
   return (1.0f - s) * low + s * high;
 }
 
-void appendBranchInstances(const PlantView& view, float barkLayer, const Vec3& barkMean,
-                           std::vector<BranchInstance>& out) {
+namespace {
+
+// Writes view.model's nodeCount() branch instances to out[0, nodeCount()).
+void writeBranchInstances(const PlantView& view, float barkLayer, const Vec3& barkMean, BranchInstance* out) {
   assert(view.model);
   const PlantModel& m = *view.model;
   assert(view.stress.empty() || view.stress.size() == m.nodeCount());
-  const size_t base = out.size();
-  out.resize(base + m.nodeCount());
   std::vector<int32_t> cont = continuingChildren(m);
   for (size_t i = 0; i < m.nodeCount(); ++i) {
-    BranchInstance& b = out[base + i];
+    BranchInstance& b = out[i];
     const Vec3 dir = m.direction(i);
     const int32_t p = m.parent[i];
     const bool joined = p >= 0 && cont[p] == int32_t(i);
@@ -67,7 +68,7 @@ void appendBranchInstances(const PlantView& view, float barkLayer, const Vec3& b
     float v0 = 0.0f;
     if (joined) {
       // The parent's end ring, exactly.
-      const BranchInstance& pb = out[base + size_t(p)];
+      const BranchInstance& pb = out[size_t(p)];
       b.start = pb.end;
       startAxis = xyz(pb.endAxis);
       startRef = xyz(pb.endRef);
@@ -101,23 +102,63 @@ void appendBranchInstances(const PlantView& view, float barkLayer, const Vec3& b
   }
 }
 
-void appendLeafInstances(const PlantView& view, std::span<const float> shapeLayer, std::span<const float> shapeAspect,
-                         std::span<const Vec3> shapeTint, std::vector<LeafInstance>& out) {
+// Writes view.model's leafCount() leaf instances to out[0, leafCount()).
+void writeLeafInstances(const PlantView& view, std::span<const float> shapeLayer, std::span<const float> shapeAspect,
+                        std::span<const Vec3> shapeTint, LeafInstance* out) {
   assert(view.model);
   const PlantModel& m = *view.model;
-  const size_t base = out.size();
-  out.resize(base + m.leafCount());
   for (size_t i = 0; i < m.leafCount(); ++i) {
     const uint16_t shape = m.leafShape[i];
     assert(shape < shapeLayer.size() && shape < shapeAspect.size() && shape < shapeTint.size());
     Mat3 axes = m.leafWorldRotation(i).toRotationMatrix();
     float size = m.leafSize[i];
-    LeafInstance& l = out[base + i];
+    LeafInstance& l = out[i];
     l.base = gpu(m.leafWorldPosition(i) + m.leafPetiole[i] * axes.col(1), m.leafMotion[i].x());
     l.halfWidth = gpu((0.5f * size * shapeAspect[shape]) * axes.col(0), shapeLayer[shape]);
     l.along = gpu(size * axes.col(1), view.selected.contains(size_t(m.leafNode[i])) ? 1.0f : 0.0f);
     l.tint = gpu(shapeTint[shape], 0.0f);
   }
+}
+
+}  // namespace
+
+void appendBranchInstances(const PlantView& view, float barkLayer, const Vec3& barkMean,
+                           std::vector<BranchInstance>& out) {
+  assert(view.model);
+  const size_t base = out.size();
+  out.resize(base + view.model->nodeCount());
+  writeBranchInstances(view, barkLayer, barkMean, out.data() + base);
+}
+
+void appendLeafInstances(const PlantView& view, std::span<const float> shapeLayer, std::span<const float> shapeAspect,
+                         std::span<const Vec3> shapeTint, std::vector<LeafInstance>& out) {
+  assert(view.model);
+  const size_t base = out.size();
+  out.resize(base + view.model->leafCount());
+  writeLeafInstances(view, shapeLayer, shapeAspect, shapeTint, out.data() + base);
+}
+
+void buildPlantInstances(std::span<const PlantView> views, std::span<const PlantMaterial> materials,
+                         std::vector<BranchInstance>& branches, std::vector<LeafInstance>& leaves) {
+  assert(materials.size() == views.size());
+  // Each plant's slices start where the plants before it end, so the order is the sequential one.
+  std::vector<size_t> branchStart(views.size() + 1, 0), leafStart(views.size() + 1, 0);
+  for (size_t i = 0; i < views.size(); ++i) {
+    const plant::PlantModel* m = views[i].model;
+    branchStart[i + 1] = branchStart[i] + (m ? m->nodeCount() : 0);
+    leafStart[i + 1] = leafStart[i] + (m ? m->leafCount() : 0);
+  }
+  branches.resize(branchStart.back());
+  leaves.resize(leafStart.back());
+  parallelFor(
+      0, views.size(),
+      [&](size_t i) {
+        if (!views[i].model) return;
+        const PlantMaterial& mat = materials[i];
+        writeBranchInstances(views[i], mat.barkLayer, mat.barkMean, branches.data() + branchStart[i]);
+        writeLeafInstances(views[i], mat.shapeLayer, mat.shapeAspect, mat.shapeTint, leaves.data() + leafStart[i]);
+      },
+      1);
 }
 
 void appendPrimitiveInstances(const PlantView& view, std::vector<std::vector<PrimitiveInstance>>& perMesh) {

@@ -73,6 +73,23 @@ void appendBranchInstances(const PlantView& view, float barkLayer, const Vec3& b
 void appendLeafInstances(const PlantView& view, std::span<const float> shapeLayer, std::span<const float> shapeAspect,
                          std::span<const Vec3> shapeTint, std::vector<LeafInstance>& out);
 
+// What a plant's instances take from the renderer's texture arrays, resolved beforehand on the
+// thread that owns them (a layer lookup may load a texture).
+struct PlantMaterial {
+  float barkLayer = 0.0f;
+  Vec3 barkMean = Vec3::Constant(0.5f);
+  std::vector<float> shapeLayer;   // per leaf shape id, as appendLeafInstances takes them
+  std::vector<float> shapeAspect;
+  std::vector<Vec3> shapeTint;
+};
+
+// Replaces `branches` and `leaves` with the instances of every plant in `views`, plant after
+// plant: bit for bit what appendBranchInstances and appendLeafInstances called on each view in
+// turn give, but the plants are built in parallel. materials[i] belongs to views[i]; a view
+// without a model adds nothing.
+void buildPlantInstances(std::span<const PlantView> views, std::span<const PlantMaterial> materials,
+                         std::vector<BranchInstance>& branches, std::vector<LeafInstance>& leaves);
+
 // Appends one instance per primitive of `view.model` to perMesh[its mesh index] (perMesh is
 // resized to the plant's mesh count). Primitives on selected nodes are highlighted.
 void appendPrimitiveInstances(const PlantView& view, std::vector<std::vector<PrimitiveInstance>>& perMesh);

@@ -542,34 +542,38 @@ void Renderer::render(const RenderScene& scene, const Camera& camera, const Rend
   Timer timer;
   m.branchData.clear();
   m.leafData.clear();
-  std::vector<float> shapeLayer, shapeAspect;
-  std::vector<Vec3> shapeTint;
-  std::vector<std::vector<PrimitiveInstance>> perMesh;
-  for (const PlantView& view : scene.plants) {
-    if (!view.model) continue;
-    const plant::PlantModel& model = *view.model;
-    float barkLayer = m.barkLayers.layer(model.bark.texture.empty() ? "builtin:bark" : model.bark.texture);
-    appendBranchInstances(view, barkLayer, m.barkLayers.meanColor(barkLayer), m.branchData);
+  // Texture layers first, here on the GL thread (a lookup may load a texture); then every
+  // plant's branch and leaf instances in parallel.
+  std::vector<PlantMaterial> materials(scene.plants.size());
+  for (size_t i = 0; i < scene.plants.size(); ++i) {
+    if (!scene.plants[i].model) continue;
+    const plant::PlantModel& model = *scene.plants[i].model;
+    PlantMaterial& mat = materials[i];
+    mat.barkLayer = m.barkLayers.layer(model.bark.texture.empty() ? "builtin:bark" : model.bark.texture);
+    mat.barkMean = m.barkLayers.meanColor(mat.barkLayer);
     size_t shapes = mesh::leafShapeCount(model);
-    shapeLayer.resize(shapes);
-    shapeAspect.resize(shapes);
-    shapeTint.resize(shapes);
+    mat.shapeLayer.resize(shapes);
+    mat.shapeAspect.resize(shapes);
+    mat.shapeTint.resize(shapes);
     for (size_t s = 0; s < shapes; ++s) {
       plant::LeafShape shape = mesh::leafShapeFor(model, s);
-      shapeLayer[s] = m.leafLayers.layer(shape.texture);
-      shapeAspect[s] = shape.aspect;
-      shapeTint[s] = shape.tint;
+      mat.shapeLayer[s] = m.leafLayers.layer(shape.texture);
+      mat.shapeAspect[s] = shape.aspect;
+      mat.shapeTint[s] = shape.tint;
     }
-    appendLeafInstances(view, shapeLayer, shapeAspect, shapeTint, m.leafData);
-    if (!model.primitives.empty()) {
-      perMesh.clear();
-      appendPrimitiveInstances(view, perMesh);
-      for (size_t i = 0; i < perMesh.size(); ++i) {
-        if (perMesh[i].empty() || model.meshes[i].mesh.indices.empty()) continue;
-        PrimitiveGpu& g = m.primitiveGpu(model.meshes[i].mesh);
-        g.data.insert(g.data.end(), perMesh[i].begin(), perMesh[i].end());
-        m.stats.primitiveInstances += perMesh[i].size();
-      }
+  }
+  buildPlantInstances(scene.plants, materials, m.branchData, m.leafData);
+  std::vector<std::vector<PrimitiveInstance>> perMesh;
+  for (const PlantView& view : scene.plants) {
+    if (!view.model || view.model->primitives.empty()) continue;
+    const plant::PlantModel& model = *view.model;
+    perMesh.clear();
+    appendPrimitiveInstances(view, perMesh);
+    for (size_t i = 0; i < perMesh.size(); ++i) {
+      if (perMesh[i].empty() || model.meshes[i].mesh.indices.empty()) continue;
+      PrimitiveGpu& g = m.primitiveGpu(model.meshes[i].mesh);
+      g.data.insert(g.data.end(), perMesh[i].begin(), perMesh[i].end());
+      m.stats.primitiveInstances += perMesh[i].size();
     }
   }
   m.strokeData.clear();
