@@ -468,7 +468,7 @@ void Studio::Impl::endGesture(const Vec2& pixel) {
         apply(session::MoveObstacle{g.obstacle, g.original, g.previewScale});
       else if ((g.preview.translation - g.original.translation).norm() > 0.0f ||
                !g.preview.rotation.isApprox(g.original.rotation))
-        apply(session::MoveObstacle{g.obstacle, g.preview});
+        apply(session::MoveObstacle{g.obstacle, g.preview, std::nullopt});
       return;
     case Tool::Light:
       apply(session::MoveLight{g.light, g.lightPreview});

@@ -189,7 +189,7 @@ TEST_F(EditFixture, MoveObstacleAndLight) {
   checkUndoRedo(move);
   editor->apply(move);
   EXPECT_EQ(session->environment().obstacle(1).worldFromLocal.translation, move.worldFromLocal.translation);
-  EXPECT_THROW(editor->apply(MoveObstacle{9, {}}), Error);
+  EXPECT_THROW(editor->apply(MoveObstacle{9, {}, std::nullopt}), Error);
   MoveLight light;
   light.light = 0;
   light.value.direction = Vec3(1, -1, 0).normalized();

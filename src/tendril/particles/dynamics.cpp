@@ -125,6 +125,8 @@ void ParticleWorld::shapeMatch() {
   // a step; R_i is renewed whenever the particle turns.
   // Everything else that does not move within a step is gathered here once: masses, rest
   // offsets, eq. 4's weights, the stiffness and the anchor pull.
+  // Masses first: each group below reads its parent's and children's by their slots.
+  parallelFor(0, count, [&](size_t k) { matchRest_[k].matchMass = matchMass(pieceOrder_[k]); }, 4096);
   parallelFor(0, count, [&](size_t k) {
     const uint32_t i = pieceOrder_[k];
     MatchRest& r = matchRest_[k];
@@ -132,7 +134,6 @@ void ParticleWorld::shapeMatch() {
     r.childBegin = matchChildBegin_[k];
     r.childEnd = matchChildEnd_[k];
     r.qr = qr_[i];
-    r.matchMass = matchMass(i);
     const float bb = r.matchMass / 5.0f * b_[i] * b_[i], aa = r.matchMass / 5.0f * a_[i] * a_[i];
     const Mat3 Rr = qr_[i].toRotationMatrix();
     r.restMoment.row(0) = bb * Rr.col(0).transpose();
@@ -143,12 +144,15 @@ void ParticleWorld::shapeMatch() {
     Vec3 cr = r.matchMass * xr_[i];
     const uint32_t p = parent_[i];
     if (p != kNone) {
-      mass += matchMass(p);
-      cr += matchMass(p) * xr_[p];
+      const float mp = matchRest_[r.parent].matchMass;
+      mass += mp;
+      cr += mp * xr_[p];
     }
-    for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) {
-      mass += matchMass(c);
-      cr += matchMass(c) * xr_[c];
+    // The children's slots, in the order of the child list.
+    for (uint32_t c = r.childBegin; c < r.childEnd; ++c) {
+      const float mc = matchRest_[c].matchMass;
+      mass += mc;
+      cr += mc * xr_[pieceOrder_[c]];
     }
     r.invGroupMass = 1.0f / mass;
     r.restOffset = xr_[i] - cr * r.invGroupMass;

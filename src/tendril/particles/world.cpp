@@ -308,8 +308,12 @@ plant::PlantModel ParticleWorld::snapshot(uint32_t plantId) const {
   SnapshotParts parts;
   for (uint32_t i = 0; i < capacity(); ++i) {
     if (!(flags_[i] & kActive) || plant_[i] != plantId) continue;
-    if (flags_[i] & kLeaf) parts.leafParticles.push_back(i);
-    else if ((flags_[i] & kDetached) && parent_[i] == kNone) parts.brokenRoots.push_back(i);
+    if (flags_[i] & kLeaf) {
+      parts.leafParticles.push_back(i);
+      continue;
+    }
+    ++parts.branchParticles;
+    if ((flags_[i] & kDetached) && parent_[i] == kNone) parts.brokenRoots.push_back(i);
   }
   for (uint32_t k = 0; k < leaves_.size(); ++k)
     if (plant_[leaves_[k].particle] == plantId) parts.attachedLeaves.push_back(k);
@@ -321,8 +325,13 @@ std::vector<plant::PlantModel> ParticleWorld::snapshots() const {
   std::vector<SnapshotParts> parts(plants_.size());
   for (uint32_t i = 0; i < capacity(); ++i) {
     if (!(flags_[i] & kActive) || plant_[i] >= plants_.size()) continue;
-    if (flags_[i] & kLeaf) parts[plant_[i]].leafParticles.push_back(i);
-    else if ((flags_[i] & kDetached) && parent_[i] == kNone) parts[plant_[i]].brokenRoots.push_back(i);
+    SnapshotParts& part = parts[plant_[i]];
+    if (flags_[i] & kLeaf) {
+      part.leafParticles.push_back(i);
+      continue;
+    }
+    ++part.branchParticles;
+    if ((flags_[i] & kDetached) && parent_[i] == kNone) part.brokenRoots.push_back(i);
   }
   for (uint32_t k = 0; k < leaves_.size(); ++k) {
     const uint32_t p = plant_[leaves_[k].particle];
@@ -344,6 +353,7 @@ plant::PlantModel ParticleWorld::snapshotFrom(uint32_t plantId, const SnapshotPa
   m.species = pl.species.name;
   m.bark = pl.species.bark;
   m.leafShapes = pl.species.leafShapes;
+  m.reserve(parts.branchParticles, parts.attachedLeaves.size() + parts.leafParticles.size());
 
   std::vector<uint32_t> stack;
   auto addTree = [&](uint32_t root, bool broken) {

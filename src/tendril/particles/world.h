@@ -164,6 +164,7 @@ class ParticleWorld {
   // particles in slot order, and its attached leaves in leaves_ order.
   struct SnapshotParts {
     std::vector<uint32_t> brokenRoots, leafParticles, attachedLeaves;
+    size_t branchParticles = 0;  // active particles that are not leaves: at most this many nodes
   };
   // `node` (capacity() entries) receives the node index of every particle of the plant.
   plant::PlantModel snapshotFrom(uint32_t plant, const SnapshotParts& parts, std::vector<int32_t>& node) const;
