@@ -105,10 +105,6 @@ Vec3 windGrowthDirection(const Vec3& direction, const Vec3& wind, float angle) {
   return (Eigen::AngleAxisf(std::min(angle, toWind), u / s) * direction).normalized();
 }
 
-bool leafDetaches(float w, const GrowthFlowSpecies& s) {
-  return w > s.strengthToWind * s.petioleStrength || w > s.strengthToWind * s.bladeStrength;
-}
-
 void GrowthFlowHistory::record(const Vec3& wind, const GrowthFlowSpecies& s) {
   const float speed = wind.norm();
   const GrowthFlowStep g = growthStep(speed, s);
@@ -152,36 +148,6 @@ void GrowthFlowHistory::restore(std::vector<Sums> sums, std::vector<uint32_t> ac
   active_ = std::move(active);
   torn_ = std::move(torn);
   wind_ = wind;
-}
-
-float bounceAngle(float angle, int8_t& sign, float w, float rate, float dt, float limit) {
-  // eq. 10 (12, 14): reverse before leaving [−limit, limit]; eq. 11 (13, 15): move.
-  float delta = w * rate * dt;
-  float next = angle + float(sign) * delta;
-  if (next > limit || next < -limit) sign = int8_t(-sign);
-  next = angle + float(sign) * delta;
-  // A step larger than the whole range (violent wind, long frame) would overshoot the other
-  // way too: stop at the limit instead.
-  return std::clamp(next, -limit, limit);
-}
-
-void updateLeafMotion(LeafMotionState& leaf, int type, float w, float gust, float dt, const GrowthFlowSpecies& s) {
-  if (leaf.detached) return;
-  if (leafDetaches(w, s)) {
-    leaf.detached = true;
-    return;
-  }
-  float ws = gust * w;  // l_s: the fraction of the wind felt this frame
-  switch (type) {
-    case 0:
-      if (s.petioleStrength <= s.bladeStrength)
-        leaf.petioleBend = bounceAngle(leaf.petioleBend, leaf.sPetiole, ws, s.petioleBendRate, dt, s.petioleBendLimit);
-      else
-        leaf.bladeBend = bounceAngle(leaf.bladeBend, leaf.sBlade, ws, s.bladeBendRate, dt, s.bladeBendLimit);
-      break;
-    case 1: leaf.twist = bounceAngle(leaf.twist, leaf.sTwist, ws, s.twistRate, dt, s.twistLimit); break;
-    default: leaf.vibrate = bounceAngle(leaf.vibrate, leaf.sVibrate, ws, s.vibrateRate, dt, s.vibrateLimit); break;
-  }
 }
 
 }  // namespace tendril::wind

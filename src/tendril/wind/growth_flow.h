@@ -25,6 +25,7 @@
 
 #include "tendril/core/math.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -115,7 +116,9 @@ float nextGrowthAngle(float angle, const GrowthFlowStep& step);
 Vec3 windGrowthDirection(const Vec3& direction, const Vec3& wind, float angle);
 
 // Algorithm 2's detachment test.
-bool leafDetaches(float windSpeed, const GrowthFlowSpecies& s);
+inline bool leafDetaches(float w, const GrowthFlowSpecies& s) {
+  return w > s.strengthToWind * s.petioleStrength || w > s.strengthToWind * s.bladeStrength;
+}
 
 // The wind a whole plant grew in, one record per unit of growth time, for models whose organs
 // are not grown one at a time but live in a string that is re-read (L-systems): an organ born
@@ -158,8 +161,18 @@ class GrowthFlowHistory {
 };
 
 // eq. 10–15: one angle with its direction of motion. Returns the new angle; flips `sign`
-// before the angle would leave [−limit, limit].
-float bounceAngle(float angle, int8_t& sign, float windSpeed, float rate, float dt, float limit);
+// before the angle would leave [−limit, limit]. (Inline with updateLeafMotion: the motion of
+// every leaf of a plant runs through them each frame.)
+inline float bounceAngle(float angle, int8_t& sign, float w, float rate, float dt, float limit) {
+  // eq. 10 (12, 14): reverse before leaving [−limit, limit]; eq. 11 (13, 15): move.
+  float delta = w * rate * dt;
+  float next = angle + float(sign) * delta;
+  if (next > limit || next < -limit) sign = int8_t(-sign);
+  next = angle + float(sign) * delta;
+  // A step larger than the whole range (violent wind, long frame) would overshoot the other
+  // way too: stop at the limit instead.
+  return std::clamp(next, -limit, limit);
+}
 
 // A leaf's motion state (Algorithm 2): the four angles and their directions.
 struct LeafMotionState {
@@ -169,7 +182,24 @@ struct LeafMotionState {
 };
 // One frame of Algorithm 2's motion: `motionType` ∈ {0, 1, 2} (bend, twist, vibrate), `gust`
 // ∈ [0, 1] is l_s, the fraction of the wind that reaches the leaf this frame.
-void updateLeafMotion(LeafMotionState& leaf, int motionType, float windSpeed, float gust, float dt,
-                      const GrowthFlowSpecies& s);
+inline void updateLeafMotion(LeafMotionState& leaf, int type, float w, float gust, float dt,
+                             const GrowthFlowSpecies& s) {
+  if (leaf.detached) return;
+  if (leafDetaches(w, s)) {
+    leaf.detached = true;
+    return;
+  }
+  const float ws = gust * w;  // l_s: the fraction of the wind felt this frame
+  // The angle the motion type moves, picked by index: the type is random, and a branch on it
+  // would be mispredicted for two leaves in three.
+  float* const angles[4] = {&leaf.petioleBend, &leaf.bladeBend, &leaf.twist, &leaf.vibrate};
+  int8_t* const signs[4] = {&leaf.sPetiole, &leaf.sBlade, &leaf.sTwist, &leaf.sVibrate};
+  const float rates[4] = {s.petioleBendRate, s.bladeBendRate, s.twistRate, s.vibrateRate};
+  const float limits[4] = {s.petioleBendLimit, s.bladeBendLimit, s.twistLimit, s.vibrateLimit};
+  // Type 0 bends the petiole, or the blade when t_p > t_b; 1 twists; anything else vibrates.
+  const unsigned t = unsigned(type) < 2u ? unsigned(type) : 2u;
+  const unsigned k = t + 1u - unsigned(t == 0u && s.petioleStrength <= s.bladeStrength);
+  *angles[k] = bounceAngle(*angles[k], *signs[k], ws, rates[k], dt, limits[k]);
+}
 
 }  // namespace tendril::wind
