@@ -163,6 +163,42 @@ TEST(WindMotion, SameForAnyThreadCount) {
   EXPECT_EQ(hashes[0], hashes[1]);
 }
 
+TEST(WindMotion, SteadyWindIsReusedOnlyWhileItLasts) {
+  // A constant wind's torques are kept from frame to frame. The same winds with a far emitter
+  // that adds nothing are no longer uniform and are computed afresh every frame: both must pose
+  // the plant identically, also when the wind turns, gusts and steadies again.
+  plant::PlantModel rest = leafyTree();
+  GrowthFlowSpecies soft;
+  soft.youngModulus = 2e6f;
+  env::WindEmitter far;
+  far.position = Vec3(1e4f, 0, 0);
+  far.direction = Vec3::UnitX();
+  far.speed = 1.0f;
+  far.radius = 0.1f;
+  far.reach = 1.0f;
+  WindMotion kept(rest, soft), afresh(rest, soft);
+  plant::PlantModel a, b;
+  int frame = 0;
+  double moved = 0;
+  for (auto [velocity, gusty] : {std::pair{Vec3(8, 0, 0), false}, std::pair{Vec3(0, 0, 11), false},
+                                 std::pair{Vec3(0, 0, 11), true}, std::pair{Vec3(0, 0, 11), false},
+                                 std::pair{Vec3(-5, 0, 3), false}}) {
+    env::WindSettings s;
+    s.mode = gusty ? env::WindMode::Gusty : env::WindMode::Constant;
+    s.velocity = velocity;
+    env::WindSettings withEmitter = s;
+    withEmitter.emitters.push_back(far);
+    for (int f = 0; f < 4; ++f, ++frame) {
+      const float t = 0.3f * float(frame);
+      kept.step(t, 0.04f, env::WindField(s), a);
+      afresh.step(t, 0.04f, env::WindField(withEmitter), b);
+      ASSERT_EQ(plant::contentHash(a), plant::contentHash(b)) << "frame " << frame;
+      for (size_t i = 0; i < rest.nodeCount(); ++i) moved = std::max(moved, double((a.tip(i) - rest.tip(i)).norm()));
+    }
+  }
+  EXPECT_GT(moved, 0.01);  // the plant did sway
+}
+
 TEST(WindAnimation, JointsAreBoundedAndCoverTheRoots) {
   plant::PlantModel p = meshtest::syntheticIvy(5000, 2);
   for (int maxJoints : {8, 32, 128}) {

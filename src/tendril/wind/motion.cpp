@@ -5,6 +5,7 @@
 #include "tendril/mesh/leaf_mesh.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace tendril::wind {
@@ -42,6 +43,26 @@ inline Quat swayRotation(float angle, const Vec3& axis) {
   return Quat(c, s * axis.x(), s * axis.y(), s * axis.z());
 }
 
+// q scaled to unit length, for q a product of unit quaternions: |q|² = 1 + ε with ε of float
+// round-off, where one Newton step for 1 / √(1 + ε), 1 − ε / 2, is as good as a square root and
+// a division and much shorter (composing is a chain of these from root to tip).
+inline Quat renormalized(const Quat& q) {
+  const float n2 = q.squaredNorm();
+  if (!(std::fabs(n2 - 1.0f) < 1e-4f)) return q.normalized();
+  return Quat(q.coeffs() * (1.5f - 0.5f * n2));
+}
+
+// A leaf's posed rotation: its rest rotation · R_Y(ψ) · R_X(θ + φ), the last product written
+// out for the two axes. `rest` is of unit length, so the product is too (to float round-off,
+// as a normalised one).
+inline Quat posedLeafRotation(const Quat& rest, const LeafMotionState& L) {
+  const Quat y = swayRotation(L.twist, Vec3::UnitY());
+  const Quat x = swayRotation(L.petioleBend + L.vibrate, Vec3::UnitX());
+  return rest * Quat(y.w() * x.w(), y.w() * x.x(), y.y() * x.w(), -(y.y() * x.x()));
+}
+
+inline Vec3 leafMotionOf(const LeafMotionState& L) { return Vec3(L.bladeBend, L.twist, L.vibrate); }
+
 bool heldBySupport(uint32_t flags) {
   return (flags & (plant::kNodeClimbing | plant::kNodeAnchored)) != 0;
 }
@@ -51,23 +72,22 @@ bool heldBySupport(uint32_t flags) {
 WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& species, MotionSettings settings)
     : rest_(rest), species_(species), settings_(settings) {
   const size_t n = rest_.nodeCount();
+  nodes_.resize(n);
   stiffness_.resize(n);
   area_.resize(n);
-  period_.resize(n);
-  phase_.resize(n);
   held_.resize(n);
   centre_.resize(n);
   direction_.resize(n);
-  posed_.resize(n);
   force_.resize(n);
+  moment_.resize(n);
+  speed_.resize(n);
   angle_.assign(n, 0.0f);
   Q_.assign(n, Quat::Identity());
-  T_.assign(n, Vec3::Zero());
+  pose_.resize(n);
 
   // Leaf areas and the leaves' share of each node's drag and mass.
   const size_t m = rest_.leafCount();
   leaves_.assign(m, LeafMotionState{});
-  leafArea_.resize(m);
   std::vector<float> mass(n);
   for (size_t i = 0; i < n; ++i) {
     float r = rest_.radius[i], l = rest_.length[i];
@@ -77,15 +97,17 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
     held_[i] = heldBySupport(rest_.flags[i]);
     direction_[i] = rest_.direction(i);
     centre_[i] = rest_.position[i] + 0.5f * l * direction_[i];
+    pose_[i] = Pose{rest_.position[i], 0.0f};
   }
   std::vector<float> leafAreaOfNode(n, 0.0f);
   for (size_t j = 0; j < m; ++j) {
     float aspect = mesh::leafShapeFor(rest_, rest_.leafShape[j]).aspect;
-    leafArea_[j] = 0.7f * rest_.leafSize[j] * rest_.leafSize[j] * aspect;  // a leaf fills ~70 % of its quad
+    float area = 0.7f * rest_.leafSize[j] * rest_.leafSize[j] * aspect;  // a leaf fills ~70 % of its quad
     int32_t node = rest_.leafNode[j];
-    leafAreaOfNode[size_t(node)] += leafArea_[j];
+    leafAreaOfNode[size_t(node)] += area;
     mass[size_t(node)] += species_.leafMass;
   }
+  for (size_t i = 0; i < n; ++i) area_[i] += leafAreaOfNode[i];
   // Subtree masses (children after parents, so a reverse pass sums them).
   std::vector<float> carried = mass;
   for (size_t i = n; i-- > 0;)
@@ -93,37 +115,39 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
 
   // Chains: a branch start (or root) and the nodes up to the next branch start share phase and
   // period, set by the chain's base segment: 2π √(I / k), I = m l² / 3 with m all it carries.
-  std::vector<int32_t> chain(n);
   for (size_t i = 0; i < n; ++i) {
-    int32_t p = rest_.parent[i];
-    bool start = p < 0 || (rest_.flags[i] & plant::kNodeBranchStart);
-    chain[i] = start ? int32_t(i) : chain[size_t(p)];
-  }
-  for (size_t i = 0; i < n; ++i) {
-    size_t c = size_t(chain[i]);
-    float l = std::max(rest_.length[c], 1e-3f);
-    float inertia = carried[c] * l * l / 3.0f;
-    float period = kTwoPi * std::sqrt(inertia / std::max(stiffness_[c], 1e-12f));
+    const int32_t p = rest_.parent[i];
+    SwayNode& r = nodes_[i];
+    r.restOrientation = rest_.orientation[i].normalized();
+    r.parent = p;
+    r.offset = p < 0 ? rest_.position[i] : Vec3(rest_.position[i] - rest_.position[size_t(p)]);
+    r.axis = Vec3::UnitX();
+    r.steady = 0.0f;
+    r.sinToWind = 0.0f;
+    r.cosToWind = 1.0f;
+    const bool start = p < 0 || (rest_.flags[i] & plant::kNodeBranchStart);
+    if (!start) {
+      r.chain = nodes_[size_t(p)].chain;
+      continue;
+    }
+    r.chain = uint32_t(chainPeriod_.size());
+    float l = std::max(rest_.length[i], 1e-3f);
+    float inertia = carried[i] * l * l / 3.0f;
+    float period = kTwoPi * std::sqrt(inertia / std::max(stiffness_[i], 1e-12f));
     period = std::clamp(period, 0.4f, 6.0f);  // keep sway visible and calm for extreme species
     if (settings_.loopSeconds > 0.0f) {
       float cycles = std::max(1.0f, std::round(settings_.loopSeconds / period));
       period = settings_.loopSeconds / cycles;
     }
-    period_[i] = period;
-    phase_[i] = Rng(RandomKey{settings_.seed, 0, c, 0, kPhasePurpose}).uniform(0.0f, kTwoPi);
-    area_[i] += leafAreaOfNode[i];
+    chainPeriod_.push_back(period);
+    chainPhase_.push_back(Rng(RandomKey{settings_.seed, 0, i, 0, kPhasePurpose}).uniform(0.0f, kTwoPi));
   }
-  chainOf_.resize(n);
-  for (size_t i = 0; i < n; ++i) {
-    if (chain[i] == int32_t(i)) chainStart_.push_back(uint32_t(i));
-    chainOf_[i] = chain[i] == int32_t(i) ? uint32_t(chainStart_.size() - 1) : chainOf_[size_t(chain[i])];
-  }
-  ease_.resize(chainStart_.size());
-  wind_.resize(n);
-  moment_.resize(n);
-  turned_.resize(n);
+  ease_.resize(chainPeriod_.size());
   leafKey_.resize(m);
+  leafRest_.resize(m);
+  for (size_t j = 0; j < m; ++j) leafRest_[j] = rest_.leafRotation[j].normalized();
   for (size_t j = 0; j < m; ++j) leafKey_[j] = Rng(RandomKey{settings_.seed, 0, j, 0, kLeafPurpose}).key();
+  slot_.assign(m, 0);
 
   // Split the tree: a task is a subtree of at most `limit` nodes whose parent's subtree is
   // larger; what is left is the top part (closed under parents).
@@ -155,17 +179,26 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
     if (taskOf[i] >= 0) taskNodes_[count[size_t(taskOf[i])]++] = uint32_t(i);
 }
 
-void WindMotion::computeSway(float t, const env::WindField& wind) {
+std::vector<Vec3> WindMotion::nodeTranslation() const {
+  std::vector<Vec3> T(pose_.size());
+  for (size_t i = 0; i < T.size(); ++i) T[i] = pose_[i].position - Q_[i] * rest_.position[i];
+  return T;
+}
+
+void WindMotion::computeTorques(float t, const env::WindField& wind) {
   const size_t n = rest_.nodeCount();
   const env::WindSettings& ws = wind.settings();
   const bool loop = settings_.loopSeconds > 0.0f;
   const float half = 0.5f * settings_.airDensity * species_.dragCoefficient;
 
-  // F_w per node from the wind at its centre of gravity, and its moment about the node. A
-  // looping clip uses the steady wind (prevailing + emitters) with gusts that repeat: the gust
-  // noise is read on a circle.
-  // A constant wind without emitters is the same everywhere: no need to ask the field.
+  // A constant wind without emitters is the same everywhere: no need to ask the field, and
+  // while it stays the same, neither torques nor steady angles change from frame to frame.
   const bool uniform = !loop && ws.mode == env::WindMode::Constant && ws.emitters.empty();
+  if (uniform && uniformCached_ && ws.velocity == uniformWind_) return;
+
+  // F_w per node from the wind at its centre of gravity, and its moment about the node; the
+  // node's sway axis u = b × w and its angle to the wind. A looping clip uses the steady wind
+  // (prevailing + emitters) with gusts that repeat: the gust noise is read on a circle.
   parallelFor(size_t(0), n, [&](size_t i) {
     Vec3 w;
     if (uniform) {
@@ -188,13 +221,23 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
     float leafA = area_[i] - 2.0f * rest_.radius[i] * rest_.length[i];
     force_[i] = half * (2.0f * rest_.radius[i] * rest_.length[i] * wPerp.norm() * wPerp + leafA * w.norm() * w);
     moment_[i] = (centre_[i] - rest_.position[i]).cross(force_[i]);
-    wind_[i] = w;
+    const float speed = w.norm();
+    speed_[i] = speed;
+    SwayNode& r = nodes_[i];
+    r.axis = Vec3::UnitX();
+    r.sinToWind = 0.0f;  // below the threshold: does not sway
+    r.cosToWind = 1.0f;
+    if (!held_[i] && speed > 0.0f) {
+      const Vec3 wHat = w * (1.0f / speed);
+      const Vec3 u = d.cross(wHat);
+      const float s = u.norm();
+      if (s >= 1e-6f) {
+        r.axis = u * (1.0f / s);
+        r.sinToWind = s;
+        r.cosToWind = d.dot(wHat);
+      }
+    }
   }, 256);
-  // The sinusoidal ease of each chain (§3.1.1): θ = θ* (1 − cos φ) / 2.
-  parallelFor(size_t(0), chainStart_.size(), [&](size_t c) {
-    const size_t i = chainStart_[c];
-    ease_[c] = 0.5f * (1.0f - std::cos(kTwoPi * t / period_[i] + phase_[i]));
-  }, 1024);
 
   // T_r: what the children pass back, as their total force and its moment about this node;
   // children in decreasing index order, within tasks in parallel, then the top part.
@@ -209,68 +252,73 @@ void WindMotion::computeSway(float t, const env::WindField& wind) {
   for (size_t e = mergeNodes_.size(); e-- > 0;)
     if (rest_.parent[mergeNodes_[e]] >= 0) passBack(mergeNodes_[e]);
 
-  // Compose parents first: node i's subtree turns about p_i on top of its parent's motion, by
-  // the angle of the moment against the segment's spring (eq. 1 balanced by K), eased in and
-  // out over the chain's period, toward the wind about u = b × w. A node never turns past the
-  // wind: the angles along its path are capped by its rest angle to the wind.
-  auto compose = [&](size_t i) {
-    const int32_t p = rest_.parent[i];
-    const Quat Qp = p < 0 ? Quat::Identity() : Q_[size_t(p)];
-    const Vec3 Tp = p < 0 ? Vec3::Zero() : T_[size_t(p)];
-    const float before = p < 0 ? 0.0f : turned_[size_t(p)];
-    float a = 0.0f;
-    Vec3 axis = Vec3::UnitX();
-    const Vec3& w = wind_[i];
-    const float speed = w.norm();
-    if (!held_[i] && speed > 0.0f) {
-      const Vec3& d = direction_[i];
-      const Vec3 wHat = w * (1.0f / speed);
-      const Vec3 u = d.cross(wHat);
-      const float s = u.norm();
-      if (s >= 1e-6f) {
-        const float steady = moment_[i].norm() / stiffness_[i];
-        a = std::min(steady, species_.maxSwayAngle) * ease_[chainOf_[i]];
-        axis = u * (1.0f / s);
-        // §3.1.1's angle to the wind, acos(b·w / bw), is at least its sine s: only a path
-        // turned further needs it exactly.
-        if (a > 0.0f && before + a > s) {
-          const float toWind = atan2Upper(s, d.dot(wHat));
-          if (a > toWind - before) a = std::max(0.0f, toWind - before);
-        }
-      }
+  // The steady angle: the moment against the segment's spring (eq. 1 balanced by K), at most
+  // the species' limit.
+  parallelFor(size_t(0), n, [&](size_t i) {
+    SwayNode& r = nodes_[i];
+    r.steady = r.sinToWind >= 1e-6f ? std::min(moment_[i].norm() / stiffness_[i], species_.maxSwayAngle) : 0.0f;
+  }, 1024);
+  uniformCached_ = uniform;
+  uniformWind_ = ws.velocity;
+}
+
+void WindMotion::compose(float t, plant::PlantModel& posed) {
+  // The sinusoidal ease of each chain (§3.1.1): θ = θ* (1 − cos φ) / 2.
+  const float phi = kTwoPi * t;
+  parallelFor(size_t(0), chainPeriod_.size(), [&](size_t c) {
+    ease_[c] = 0.5f * (1.0f - std::cos(phi / chainPeriod_[c] + chainPhase_[c]));
+  }, 1024);
+
+  // Parents first: node i's subtree turns about p_i on top of its parent's motion by the eased
+  // steady angle, toward the wind about u = b × w. A node never turns past the wind: the
+  // angles along its path are capped by its rest angle to the wind.
+  // Plain pointers: Eigen's stores may alias anything, so members would be reloaded per node.
+  const SwayNode* const nodes = nodes_.data();
+  const float* const ease = ease_.data();
+  Quat* const rotation = Q_.data();
+  Pose* const pose = pose_.data();
+  float* const angle = angle_.data();
+  Vec3* const position = posed.position.data();
+  Quat* const orientation = posed.orientation.data();
+  auto composeNode = [=](size_t i) {
+    const SwayNode& r = nodes[i];
+    Quat Qp = Quat::Identity();
+    Vec3 p = r.offset;
+    float before = 0.0f;
+    if (r.parent >= 0) {
+      const size_t parent = size_t(r.parent);
+      Qp = rotation[parent];
+      before = pose[parent].turned;
+      // The node turns about its own base, which its parent carries; rotating the rest offset
+      // from the parent keeps round-off small far from the origin.
+      p = pose[parent].position + Qp * r.offset;
     }
-    angle_[i] = a;
-    turned_[i] = before + a;
-    Q_[i] = a > 0.0f ? (Qp * swayRotation(a, axis)).normalized() : Qp;
-    posed_[i] = Qp * rest_.position[i] + Tp;  // the node turns about its own base
-    T_[i] = posed_[i] - Q_[i] * rest_.position[i];
+    float a = r.steady > 0.0f ? r.steady * ease[r.chain] : 0.0f;
+    // §3.1.1's angle to the wind, acos(b·w / bw), is at least its sine: only a path turned
+    // further needs it exactly.
+    if (a > 0.0f && before + a > r.sinToWind) {
+      const float toWind = atan2Upper(r.sinToWind, r.cosToWind);
+      if (a > toWind - before) a = std::max(0.0f, toWind - before);
+    }
+    const Quat Q = a > 0.0f ? renormalized(Qp * swayRotation(a, r.axis)) : Qp;
+    angle[i] = a;
+    rotation[i] = Q;
+    pose[i] = Pose{p, before + a};
+    position[i] = p;
+    orientation[i] = Q * r.restOrientation;  // both of unit length: so is the product
   };
-  for (uint32_t i : topNodes_) compose(i);
-  parallelFor(size_t(0), taskStart_.size() - 1, [&](size_t k) {
-    for (size_t e = taskStart_[k]; e < taskStart_[k + 1]; ++e) compose(taskNodes_[e]);
+  for (uint32_t i : topNodes_) composeNode(i);
+  const uint32_t* const taskNodes = taskNodes_.data();
+  const uint32_t* const taskStart = taskStart_.data();
+  parallelFor(size_t(0), taskStart_.size() - 1, [=](size_t k) {
+    for (size_t e = taskStart[k]; e < taskStart[k + 1]; ++e) composeNode(taskNodes[e]);
   }, 1);
 }
 
 void WindMotion::step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed) {
-  computeSway(t, wind);
   const size_t n = rest_.nodeCount();
-
-  // Leaves: one motion type and one gust fraction per leaf and frame (Algorithm 2), in the wind
-  // of the node they hang on (gusts vary over metres, a leaf is centimetres from its node).
   const size_t m = rest_.leafCount();
-  const uint32_t frame = frame_;
-  parallelFor(size_t(0), m, [&](size_t j) {
-    LeafMotionState& L = leaves_[j];
-    if (L.detached) return;
-    float w = wind_[size_t(rest_.leafNode[j])].norm();
-    Rng rng(mix64(leafKey_[j] ^ (uint64_t(frame) * 0x9e3779b97f4a7c15ull)));
-    int type = int(rng.below(3));
-    float gust = settings_.gustMin + (1.0f - settings_.gustMin) * rng.uniform();
-    updateLeafMotion(L, type, w, gust, dt, species_);
-  }, 1024);
-  ++frame_;
 
-  // The posed plant: nodes moved rigidly with their subtree transforms, leaves carried along.
   // What does not move is copied into a new `posed` only.
   const bool fresh = posedFor_ != &posed || posed.nodeCount() != n;
   posedFor_ = &posed;
@@ -290,43 +338,75 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
     posed.order = rest_.order;
     posed.flags = rest_.flags;
   }
-  parallelFor(size_t(0), n, [&](size_t i) {
-    posed.position[i] = posed_[i];
-    posed.orientation[i] = (Q_[i] * rest_.orientation[i]).normalized();
-  }, 1024);
 
-  // Leaves still attached, in order, written in parallel; their fixed fields only when the set
-  // changed.
-  const size_t before = kept_.size();
+  // Branch sway; the posed nodes moved rigidly with their subtree transforms.
+  computeTorques(t, wind);
+  compose(t, posed);
+
+  // Leaves: one motion type and one gust fraction per leaf and frame (Algorithm 2), in the wind
+  // of the node they hang on (gusts vary over metres, a leaf is centimetres from its node).
+  // While no leaf tears off, each is written straight to its place in the posed plant.
+  const size_t k = kept_.size();
+  const bool inPlace = !fresh && posed.leafNode.size() == k && posed.leafRotation.size() == k &&
+                       posed.leafMotion.size() == k;
+  std::atomic<bool> tore{false};
+  const uint32_t frame = frame_;
+  const float gustMin = settings_.gustMin;
+  const GrowthFlowSpecies& species = species_;
+  // Plain pointers, as in compose().
+  LeafMotionState* const leaves = leaves_.data();
+  const uint64_t* const keys = leafKey_.data();
+  const int32_t* const leafNode = rest_.leafNode.data();
+  const Quat* const restRotation = leafRest_.data();
+  const float* const speed = speed_.data();
+  const uint32_t* const slot = k == m ? nullptr : slot_.data();  // none torn off: leaf j is posed leaf j
+  Quat* const rotation = posed.leafRotation.data();
+  Vec3* const motion = posed.leafMotion.data();
+  parallelFor(size_t(0), m, [=, &tore](size_t j) {
+    LeafMotionState& L = leaves[j];
+    if (L.detached) return;
+    Rng rng(mix64(keys[j] ^ (uint64_t(frame) * 0x9e3779b97f4a7c15ull)));
+    int type = int(rng.below(3));
+    float gust = gustMin + (1.0f - gustMin) * rng.uniform();
+    updateLeafMotion(L, type, speed[size_t(leafNode[j])], gust, dt, species);
+    if (L.detached) {
+      tore.store(true, std::memory_order_relaxed);
+    } else if (inPlace) {
+      const size_t o = slot ? slot[j] : j;
+      rotation[o] = posedLeafRotation(restRotation[j], L);
+      motion[o] = leafMotionOf(L);
+    }
+  }, 1024);
+  ++frame_;
+  if (inPlace && !tore.load()) return;
+
+  // The set of leaves changed (or `posed` is new): leaves still attached, in order, with their
+  // fixed fields.
   kept_.clear();
   for (size_t j = 0; j < m; ++j)
-    if (!leaves_[j].detached) kept_.push_back(uint32_t(j));
-  const size_t k = kept_.size();
-  const bool leavesChanged = fresh || k != before || posed.leafNode.size() != k;
-  if (leavesChanged) {
-    posed.leafNode.resize(k);
-    posed.leafOffset.resize(k);
-    posed.leafSize.resize(k);
-    posed.leafThickness.resize(k);
-    posed.leafPetiole.resize(k);
-    posed.leafShape.resize(k);
-  }
-  posed.leafRotation.resize(k);
-  posed.leafMotion.resize(k);
-  parallelFor(size_t(0), k, [&](size_t o) {
-    const size_t j = kept_[o];
-    const LeafMotionState& L = leaves_[j];
-    const Quat motion = swayRotation(L.twist, Vec3::UnitY()) * swayRotation(L.petioleBend + L.vibrate, Vec3::UnitX());
-    posed.leafRotation[o] = (rest_.leafRotation[j] * motion).normalized();
-    posed.leafMotion[o] = Vec3(L.bladeBend, L.twist, L.vibrate);
-    if (leavesChanged) {
-      posed.leafNode[o] = rest_.leafNode[j];
-      posed.leafOffset[o] = rest_.leafOffset[j];
-      posed.leafSize[o] = rest_.leafSize[j];
-      posed.leafThickness[o] = rest_.leafThickness[j];
-      posed.leafPetiole[o] = rest_.leafPetiole[j];
-      posed.leafShape[o] = rest_.leafShape[j];
+    if (!leaves_[j].detached) {
+      slot_[j] = uint32_t(kept_.size());
+      kept_.push_back(uint32_t(j));
     }
+  const size_t kept = kept_.size();
+  posed.leafNode.resize(kept);
+  posed.leafOffset.resize(kept);
+  posed.leafSize.resize(kept);
+  posed.leafThickness.resize(kept);
+  posed.leafPetiole.resize(kept);
+  posed.leafShape.resize(kept);
+  posed.leafRotation.resize(kept);
+  posed.leafMotion.resize(kept);
+  parallelFor(size_t(0), kept, [&](size_t o) {
+    const size_t j = kept_[o];
+    posed.leafRotation[o] = posedLeafRotation(leafRest_[j], leaves_[j]);
+    posed.leafMotion[o] = leafMotionOf(leaves_[j]);
+    posed.leafNode[o] = rest_.leafNode[j];
+    posed.leafOffset[o] = rest_.leafOffset[j];
+    posed.leafSize[o] = rest_.leafSize[j];
+    posed.leafThickness[o] = rest_.leafThickness[j];
+    posed.leafPetiole[o] = rest_.leafPetiole[j];
+    posed.leafShape[o] = rest_.leafShape[j];
   }, 1024);
 }
 

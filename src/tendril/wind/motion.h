@@ -55,44 +55,64 @@ class WindMotion {
   // topology, primitive meshes) is copied from the rest plant only into a new `posed`.
   void step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed);
 
-  // The sway angle of every node in the last step (rad) and its world axis.
+  // The sway angle of every node in the last step (rad).
   const std::vector<float>& swayAngles() const { return angle_; }
   const std::vector<LeafMotionState>& leaves() const { return leaves_; }
   uint32_t frame() const { return frame_; }
   const plant::PlantModel& rest() const { return rest_; }
   // Posed rigid transform of every node's subtree in the last step: x ↦ rotation·x + translation.
   const std::vector<Quat>& nodeRotation() const { return Q_; }
-  const std::vector<Vec3>& nodeTranslation() const { return T_; }
+  // Computed when asked (the step itself carries positions, not translations).
+  std::vector<Vec3> nodeTranslation() const;
 
  private:
-  void computeSway(float t, const env::WindField& wind);
+  // What composing node i reads, in one record (one cache line): its rest frame, and the
+  // steady sway the wind gives it (set by computeTorques; kept while the wind is uniform and
+  // unchanged, as it then depends only on the rest plant).
+  struct alignas(64) SwayNode {
+    Quat restOrientation;  // normalised
+    Vec3 offset;           // rest position minus the parent's (a root: its rest position)
+    int32_t parent;
+    Vec3 axis;             // unit b × w, the sway axis
+    float steady;          // min(θ*, maxSwayAngle) before the ease; 0: does not sway
+    float sinToWind;       // |b̂ × ŵ|
+    float cosToWind;       // b̂ · ŵ
+    uint32_t chain;        // index into the chains' period and phase
+  };
+  // Where composing has got to: node i's posed position and the angle turned from the root.
+  struct Pose {
+    Vec3 position;
+    float turned;
+  };
+
+  void computeTorques(float t, const env::WindField& wind);
+  void compose(float t, plant::PlantModel& posed);
 
   plant::PlantModel rest_;
   GrowthFlowSpecies species_;
   MotionSettings settings_;
   uint32_t frame_ = 0;
 
-  // Per node, from the rest pose.
+  std::vector<SwayNode> nodes_;
+  // Per node, from the rest pose, for the torques.
   std::vector<float> stiffness_;   // k (N·m/rad)
   std::vector<float> area_;        // projected branch area + leaf area (m²)
-  std::vector<float> period_;      // s, shared by a chain
-  std::vector<float> phase_;       // rad, shared by a chain
-  std::vector<uint8_t> held_;      // grows on a support: does not sway
   std::vector<Vec3> centre_;       // centre of gravity of the segment (world, rest)
   std::vector<Vec3> direction_;    // unit segment direction b̂ (world, rest)
-  // Per node, per step.
+  std::vector<uint8_t> held_;      // grows on a support: does not sway
+  // Per node, per step (torques only when the wind is not uniform or changed).
   std::vector<Vec3> force_;        // F_w + T_r
+  std::vector<Vec3> moment_;       // moment of F_w + T_r about the node
+  std::vector<float> speed_;       // the wind speed at the node's centre of gravity
+  bool uniformCached_ = false;     // nodes_' sway and speed_ are those of a uniform `uniformWind_`
+  Vec3 uniformWind_ = Vec3::Zero();
   std::vector<float> angle_;
   std::vector<Quat> Q_;
-  std::vector<Vec3> T_;
-  std::vector<Vec3> posed_;        // the node's posed position, Q_p p + T_p
-  std::vector<Vec3> wind_;         // the wind at the node's centre of gravity
-  std::vector<Vec3> moment_;       // moment of F_w + T_r about the node
-  std::vector<float> turned_;      // angle turned along the path from the root
+  std::vector<Pose> pose_;
   // Chains (a branch start and the nodes up to the next one) share period and phase: the ease
   // of eq. 1's sinusoid is computed once per chain.
-  std::vector<uint32_t> chainOf_;     // per node: index into chainStart_
-  std::vector<uint32_t> chainStart_;  // per chain: its first node
+  std::vector<float> chainPeriod_;    // per chain (s)
+  std::vector<float> chainPhase_;     // rad
   std::vector<float> ease_;           // per chain, per step
   // The tree split for parallel passes over parents and children: subtrees of at most a few
   // thousand nodes (tasks, their nodes in index order) hang below a top part. Every node's
@@ -104,9 +124,10 @@ class WindMotion {
   std::vector<uint32_t> taskStart_;   // task k owns taskNodes_[taskStart_[k], taskStart_[k + 1])
   // Per leaf.
   std::vector<LeafMotionState> leaves_;
-  std::vector<float> leafArea_;
+  std::vector<Quat> leafRest_;     // rest rotation, normalised
   std::vector<uint64_t> leafKey_;  // random key of the leaf's motion; each frame mixes in its number
-  std::vector<uint32_t> kept_;  // leaves still attached, in order
+  std::vector<uint32_t> kept_;     // leaves still attached, in order
+  std::vector<uint32_t> slot_;     // per leaf: its index in kept_ (the posed plant's leaf)
   const plant::PlantModel* posedFor_ = nullptr;  // `posed` last written, its rest arrays copied
 };
 
