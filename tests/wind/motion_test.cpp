@@ -163,6 +163,24 @@ TEST(WindMotion, SameForAnyThreadCount) {
   EXPECT_EQ(hashes[0], hashes[1]);
 }
 
+TEST(WindMotion, SameForAnyThreadCountInASteadyWind) {
+  // The constant wind keeps its torques from the first frame; leaves tear off in the last.
+  plant::PlantModel rest = meshtest::syntheticIvy(3000, 3);
+  for (uint32_t& f : rest.flags) f &= ~uint32_t(plant::kNodeClimbing);
+  env::WindSettings steady, storm;
+  steady.velocity = Vec3(9, 0, 2);
+  storm.velocity = Vec3(30, 0, 2);
+  uint64_t hashes[2];
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+    WindMotion motion(rest, GrowthFlowSpecies{});
+    plant::PlantModel posed;
+    for (int f = 0; f < 30; ++f) motion.step(0.04f * float(f), 0.04f, env::WindField(f < 29 ? steady : storm), posed);
+    hashes[threads - 1] = plant::contentHash(posed);
+  }
+  EXPECT_EQ(hashes[0], hashes[1]);
+}
+
 TEST(WindMotion, SteadyWindIsReusedOnlyWhileItLasts) {
   // A constant wind's torques are kept from frame to frame. The same winds with a far emitter
   // that adds nothing are no longer uniform and are computed afresh every frame: both must pose
