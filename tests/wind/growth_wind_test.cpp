@@ -204,8 +204,11 @@ TEST(GrowthFlowParticles, WindAboveMaxGivesShorterThickerSmallerLeavedPlantsTurn
     EXPECT_NEAR(windy.length[i] / (0.05 * std::pow(0.97, gw[i])), 1.0, 1.1e-3) << "node " << i << ", generation " << gw[i];
     ++checked;
   }
-  for (size_t i = 1; i < calm.nodeCount(); ++i)
-    if (calmHasChild[i]) EXPECT_NEAR(calm.length[i] / 0.05, 1.0, 1.1e-3) << "node " << i;
+  for (size_t i = 1; i < calm.nodeCount(); ++i) {
+    if (calmHasChild[i]) {
+      EXPECT_NEAR(calm.length[i] / 0.05, 1.0, 1.1e-3) << "node " << i;
+    }
+  }
   EXPECT_GT(checked, 50u);
 
   // Eq. 16–17: leaves on an internode of generation g are ((1 + 0.01·1.5) / 1.01)^g as thick

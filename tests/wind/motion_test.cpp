@@ -303,7 +303,9 @@ TEST(WindAnimation, FrameSequenceCarriesTheLeavesOwnMotion) {
     return std::string(std::istreambuf_iterator<char>(in), {});
   };
   EXPECT_NE(bytes(files[0]), bytes(files[3])) << "the frames pose the plant differently";
-  EXPECT_THROW(io::writeWindFrames({{&tree, soft}}, env::WindField(g), io::WindAnimationOptions{0.0f}, dir, "x"), Error);
+  io::WindAnimationOptions zeroLength;
+  zeroLength.seconds = 0.0f;
+  EXPECT_THROW(io::writeWindFrames({{&tree, soft}}, env::WindField(g), zeroLength, dir, "x"), Error);
 }
 
 TEST(WindAnimation, BadOptionsAreAnError) {
