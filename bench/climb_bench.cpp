@@ -7,11 +7,24 @@
 #include "tendril/env/environment.h"
 #include "tendril/env/primitives.h"
 #include "tendril/io/gltf_writer.h"
+#include "tendril/plant/plant_model.h"
 #include "tendril/scene/scene.h"
 
 #include <benchmark/benchmark.h>
 
+// Under `valgrind --tool=callgrind --instr-atstart=no --collect-atstart=no`, only the growth
+// steps and the export are counted (wall and BVH construction run uninstrumented); no-ops
+// otherwise.
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#else
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_TOGGLE_COLLECT
+#endif
+
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -98,6 +111,13 @@ constexpr float kWallWidth = 60.0f;
 constexpr float kLongWallWidth = 150.0f;
 constexpr size_t kLongWallTriangles = 250000;
 
+// TENDRIL_CLIMB_BENCH_ITERATIONS overrides the iteration counts (1 keeps callgrind runs short).
+int iterations(int fallback) {
+  const char* v = std::getenv("TENDRIL_CLIMB_BENCH_ITERATIONS");
+  int n = v ? std::atoi(v) : 0;
+  return n > 0 ? n : fallback;
+}
+
 // Grows Japanese ivy plants every kPlantSpacing along the foot of a wall `width` wide; returns
 // the system and the segment count, and adds the growth time (steps only) to *seconds.
 std::unique_ptr<climb::ClimbSystem> growWall(const env::Environment& env, float width, double* seconds,
@@ -113,20 +133,35 @@ std::unique_ptr<climb::ClimbSystem> growWall(const env::Environment& env, float 
     def.seed = uint64_t(i + 1);
     system->addPlant(def, env);
   }
+  CALLGRIND_START_INSTRUMENTATION;
   Timer t;
+  CALLGRIND_TOGGLE_COLLECT;
   for (int step = 0; step < kSteps && !system->finished(); ++step) system->step(env);
+  CALLGRIND_TOGGLE_COLLECT;
   *seconds += t.seconds();
   *segments = system->stats().segments;
   return system;
+}
+
+// The grown plants' content hash as the benchmark's label: a change in the grown result
+// shows in the benchmark output.
+std::string contentHashLabel(const climb::ClimbSystem& system) {
+  std::vector<plant::PlantModel> plants;
+  for (uint32_t p = 0; p < system.plantCount(); ++p) plants.push_back(system.snapshot(p));
+  char text[32];
+  std::snprintf(text, sizeof text, "hash=%016llx", static_cast<unsigned long long>(plant::contentHash(plants)));
+  return text;
 }
 
 void BM_ClimbGrowth(benchmark::State& state) {
   Support& s = support(size_t(state.range(0)), kWallWidth, kWallHeight);
   double seconds = 0;
   size_t segments = 0, total = 0;
+  std::string hash;
   for (auto _ : state) {
     auto system = growWall(*s.env, kWallWidth, &seconds, &segments);
     total += segments;
+    hash = contentHashLabel(*system);
     state.SetIterationTime(seconds);
     seconds = 0;
     benchmark::DoNotOptimize(system.get());
@@ -134,34 +169,43 @@ void BM_ClimbGrowth(benchmark::State& state) {
   state.counters["segments"] = double(segments);
   state.counters["segments/s"] = benchmark::Counter(double(total), benchmark::Counter::kIsRate);
   state.counters["bvh_build_s"] = s.buildSeconds;
+  state.SetLabel(hash);
 }
 BENCHMARK(BM_ClimbGrowth)->Arg(10000)->Arg(100000)->Arg(1000000)->UseManualTime()->Unit(benchmark::kMillisecond)
-    ->Iterations(3);
+    ->Iterations(iterations(3));
 
 // grow + mesh + .glb, the whole `tendril grow` job without scene parsing, for a long wall.
 void BM_ClimbWholeJob(benchmark::State& state) {
   Support& s = support(kLongWallTriangles, kLongWallWidth, kWallHeight);
-  std::filesystem::path out = std::filesystem::temp_directory_path() / "tendril_bench_whole_job.glb";
+  // TENDRIL_CLIMB_BENCH_GLB names a file to keep the .glb in (to compare exports byte for byte).
+  const char* keep = std::getenv("TENDRIL_CLIMB_BENCH_GLB");
+  std::filesystem::path out = keep ? std::filesystem::path(keep)
+                                   : std::filesystem::temp_directory_path() / "tendril_bench_whole_job.glb";
   size_t total = 0, segments = 0;
+  std::string hash;
   for (auto _ : state) {
     double grow = 0;
     auto system = growWall(*s.env, kLongWallWidth, &grow, &segments);
     Timer t;
+    CALLGRIND_TOGGLE_COLLECT;
     io::ExportScene scene;
     for (uint32_t p = 0; p < system->plantCount(); ++p) scene.plants.push_back(system->snapshot(p));
     io::writeGlb(scene, out, io::ExportOptions{});
+    CALLGRIND_TOGGLE_COLLECT;
     state.SetIterationTime(grow + t.seconds());
     state.counters["grow_s"] = grow;
     state.counters["mesh_export_s"] = t.seconds();
     total += segments;
+    hash = contentHashLabel(*system);
   }
+  state.SetLabel(hash);
   state.counters["segments"] = double(segments);
   state.counters["segments/s"] = benchmark::Counter(double(total), benchmark::Counter::kIsRate);
   state.counters["glb_MB"] = double(std::filesystem::file_size(out)) / 1e6;
   state.counters["bvh_build_s"] = s.buildSeconds;
-  std::filesystem::remove(out);
+  if (!keep) std::filesystem::remove(out);
 }
-BENCHMARK(BM_ClimbWholeJob)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(2);
+BENCHMARK(BM_ClimbWholeJob)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(iterations(2));
 
 }  // namespace
 }  // namespace tendril
