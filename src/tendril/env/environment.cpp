@@ -404,7 +404,12 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // the segments of one leaf are close together
-  for (size_t base = 0; base < n; base += 8) {
+  // Full packets of eight; a remainder of up to kSingles segments is traced one ray at a time,
+  // which costs less than a packet with most of its lanes idle (a leaf pair is 8 + 2 segments).
+  constexpr size_t kSingles = 2;
+  size_t packed = n;
+  if (n % 8 != 0 && n % 8 <= kSingles) packed = n - n % 8;
+  for (size_t base = 0; base < packed; base += 8) {
     alignas(32) int valid[8];
     RTCRay8 rays;
     for (int k = 0; k < 8; ++k) {
@@ -430,6 +435,12 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
     rtcOccluded8(valid, static_cast<RTCScene>(scene_), &ctx, &rays);
     for (int k = 0; k < 8; ++k)
       if (valid[k] && rays.tfar[k] < 0.0f) return true;  // Embree sets tfar = -inf on a hit
+  }
+  for (size_t i = packed; i < n; ++i) {
+    Vec3 d = to[i] - from[i];
+    float len = d.norm();
+    if (!(len > 0.0f)) continue;
+    if (occluded(from[i], d / len, len)) return true;
   }
   return false;
 }
