@@ -33,17 +33,22 @@ struct CopyJob {
 
 size_t align4(size_t n) { return (n + 3) & ~size_t(3); }
 
+// Converted views are written this many elements at a time.
+constexpr size_t kBlock = size_t(1) << 15;
+// Scratch bytes for one block of the largest converted element (a uv).
+constexpr size_t kScratchBytes = kBlock * sizeof(Vec2);
+
 // Writes one buffer view's bytes: straight from the mesh arrays, or converted a block at a
 // time (glTF uvs, 16-bit indices) so that no copy of the whole binary chunk is ever made.
+// `scratch` holds kScratchBytes: sized once, since resizing it between uvs and indices
+// zero-filled it again for every part.
 void writeJob(const CopyJob& job, AtomicFileWriter& out, std::vector<uint8_t>& scratch) {
-  constexpr size_t kBlock = size_t(1) << 15;
   switch (job.kind) {
     case CopyJob::Kind::Bytes:
       out.write(job.source, job.count);
       return;
     case CopyJob::Kind::FlipUv: {
       const Vec2* uv = static_cast<const Vec2*>(job.source);
-      scratch.resize(kBlock * sizeof(Vec2));
       for (size_t b = 0; b < job.count; b += kBlock) {
         size_t n = std::min(kBlock, job.count - b);
         float* f = reinterpret_cast<float*>(scratch.data());
@@ -57,7 +62,6 @@ void writeJob(const CopyJob& job, AtomicFileWriter& out, std::vector<uint8_t>& s
     }
     case CopyJob::Kind::Index16: {
       const uint32_t* idx = static_cast<const uint32_t*>(job.source);
-      scratch.resize(kBlock * sizeof(uint16_t));
       for (size_t b = 0; b < job.count; b += kBlock) {
         size_t n = std::min(kBlock, job.count - b);
         uint16_t* o = reinterpret_cast<uint16_t*>(scratch.data());
@@ -263,7 +267,7 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
   if (binBytes > 0) {
     writeU32(out, static_cast<uint32_t>(binBytes));
     out.write("BIN\0", 4);
-    std::vector<uint8_t> scratch;
+    std::vector<uint8_t> scratch(kScratchBytes);
     static const uint8_t kZeros[4] = {0, 0, 0, 0};
     uint64_t at = 0;
     for (const CopyJob& job : jobs) {  // in offset order

@@ -206,6 +206,16 @@ void drawLeaf(const LeafDesign& d, Image& img) {
   const int size = img.width;
   const float px = 1.0f / static_cast<float>(size);
   std::vector<Vein> veins = leafVeins(d);
+  // Each vein's bounds and the square of a distance beyond which it cannot add to a pixel:
+  // 2w for its widest w, plus a margin far above the rounding of the distance test.
+  std::vector<Vec2> veinLo, veinHi;
+  std::vector<float> veinReach2;
+  for (const Vein& v : veins) {
+    veinLo.push_back(v.a.cwiseMin(v.b));
+    veinHi.push_back(v.a.cwiseMax(v.b));
+    const float reach = 2.0f * std::max({v.widthA, v.widthB, 0.6f * px}) + 1e-4f;
+    veinReach2.push_back(reach * reach);
+  }
   parallelFor(0, static_cast<size_t>(size), [&](size_t row) {
     for (int col = 0; col < size; ++col) {
       // Pixel centre; image rows run top to bottom, y runs up.
@@ -221,7 +231,11 @@ void drawLeaf(const LeafDesign& d, Image& img) {
         float sheen = std::exp(-((p - Vec2(-0.15f, 0.62f)).squaredNorm()) / 0.06f);
         c *= 1.0f + d.gloss * sheen;
         float veinAmount = 0.0f;
-        for (const Vein& v : veins) {
+        for (size_t k = 0; k < veins.size(); ++k) {
+          // A vein whose reach (2w) cannot touch p adds nothing; most are far from a pixel.
+          const Vec2 gap = (veinLo[k] - p).cwiseMax(p - veinHi[k]).cwiseMax(0.0f);
+          if (gap.squaredNorm() > veinReach2[k]) continue;
+          const Vein& v = veins[k];
           float t;
           float vd = segmentDistance(p, v.a, v.b, &t);
           float w = std::max(v.widthA + (v.widthB - v.widthA) * t, 0.6f * px);
