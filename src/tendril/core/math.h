@@ -92,6 +92,8 @@ struct Bounds3 {
   bool contains(const Vec3& p) const {
     return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
   }
+  // Squared distance from p to the box (0 inside).
+  float squaredDistance(const Vec3& p) const { return (min - p).cwiseMax(p - max).cwiseMax(Vec3::Zero()).squaredNorm(); }
 };
 
 // Rotation from Euler angles in degrees applied X, then Y, then Z (as in scene files).

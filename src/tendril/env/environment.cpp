@@ -623,15 +623,12 @@ float Environment::signedDistance(const Vec3& p, Vec3* gradient) const {
   constexpr size_t kKept = 16;  // bound distances kept for the second loop
   float kept[kKept];
   auto boundsDistance2 = [&](size_t k) {
-    if (k < kKept) return kept[k];
-    const Bounds3& b = obstacles_[k]->info.worldBounds;
-    return (b.min - p).cwiseMax(p - b.max).cwiseMax(Vec3::Zero()).squaredNorm();
+    return k < kKept ? kept[k] : obstacles_[k]->info.worldBounds.squaredDistance(p);
   };
   size_t first = 0;
   float firstDistance2 = kInf;
   for (size_t k = 0; k < n; ++k) {
-    const Bounds3& b = obstacles_[k]->info.worldBounds;
-    const float d2 = (b.min - p).cwiseMax(p - b.max).cwiseMax(Vec3::Zero()).squaredNorm();
+    const float d2 = obstacles_[k]->info.worldBounds.squaredDistance(p);
     if (k < kKept) kept[k] = d2;
     if (d2 < firstDistance2) {
       firstDistance2 = d2;
