@@ -1,6 +1,8 @@
 // Behaviour of the oriented-particle plants (seed 000): dynamics, anchors, growth, light
 // competition, collisions, breaking, robustness and determinism.
 #include "support/test_paths.h"
+#include "tendril/core/archive.h"
+#include "tendril/core/error.h"
 #include "tendril/core/json_reader.h"
 #include "tendril/core/parallel.h"
 #include "tendril/core/random.h"
@@ -12,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstring>
 
 namespace tendril::particles {
 namespace {
@@ -398,6 +401,81 @@ TEST(ParticleWorld, SeedsInsideObstaclesAreRejected) {
   auto env = makeEnv(kGroundAndWall);
   ParticleWorld w;
   EXPECT_THROW(w.addPlant("x", ParticleSpecies(), Vec3(0, 1, 0), Vec3(0, 1, 0), 1, *env), Error);
+}
+
+}  // namespace
+}  // namespace tendril::particles
+
+namespace tendril::particles {
+namespace {
+
+// Worlds saved before the Growth-Flow records carried their turn ("1TPW": four floats per
+// record) still load, and go on exactly as the world they were saved from when none of its
+// lineages grew in wind.
+TEST(ParticleWorld, WorldsSavedBeforeTheWindTurnStillLoad) {
+  auto env = makeEnv(kGroundAndWall);
+  ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
+  s.maxParticles = 300;
+  auto seeded = [&] {
+    auto w = std::make_unique<ParticleWorld>();
+    w->addPlant("ivy", s, Vec3(0, 0.03f, 0.11f), Vec3(0, 1, 0), 5, *env);
+    return w;
+  };
+  auto w = seeded();
+  for (int k = 0; k < 150; ++k) w->step(*env);
+  ArchiveWriter out;
+  w->saveState(out);
+  std::vector<uint8_t> now = out.take();
+
+  // Rewrite it as the earlier build wrote it: the older tag, and the Growth-Flow records
+  // (angle −1 and unit factors in still air, then the identity turn) without their turn.
+  auto u32At = [&](size_t at) {
+    uint32_t v;
+    std::memcpy(&v, now.data() + at, 4);
+    return v;
+  };
+  ASSERT_EQ(u32At(0), 0x57505432u);
+  const float record[8] = {-1, 1, 1, 1, 0, 0, 0, 1};
+  const uint64_t n = w->capacity();
+  size_t found = 0;
+  for (size_t at = 4; at + 12 + n * 32 <= now.size(); ++at) {
+    uint64_t count;
+    std::memcpy(&count, now.data() + at, 8);
+    if (count != n || u32At(at + 8) != 32u) continue;
+    bool all = true;
+    for (size_t k = 0; k < n && all; ++k) all = std::memcmp(now.data() + at + 12 + 32 * k, record, 32) == 0;
+    if (all) {
+      found = at;
+      break;
+    }
+  }
+  ASSERT_GT(found, 0u) << "the Growth-Flow records in the saved world";
+  std::vector<uint8_t> before(now.begin(), now.begin() + std::ptrdiff_t(found + 8));
+  const uint32_t size16 = 16, tag1 = 0x57505431u;
+  before.insert(before.end(), reinterpret_cast<const uint8_t*>(&size16), reinterpret_cast<const uint8_t*>(&size16) + 4);
+  for (size_t k = 0; k < n; ++k)
+    before.insert(before.end(), reinterpret_cast<const uint8_t*>(record), reinterpret_cast<const uint8_t*>(record) + 16);
+  before.insert(before.end(), now.begin() + std::ptrdiff_t(found + 12 + n * 32), now.end());
+  std::memcpy(before.data(), &tag1, 4);
+
+  auto loaded = seeded();
+  ArchiveReader in(before, "1TPW world");
+  loaded->loadState(in);
+  EXPECT_TRUE(in.atEnd());
+  for (int k = 0; k < 50; ++k) {
+    w->step(*env);
+    loaded->step(*env);
+  }
+  std::vector<plant::PlantModel> a = w->snapshots(), b = loaded->snapshots();
+  ASSERT_EQ(a.size(), 1u);
+  ASSERT_EQ(b.size(), 1u);
+  EXPECT_EQ(plant::contentHash(a[0]), plant::contentHash(b[0]));
+
+  // An unknown tag is still refused.
+  before[0] ^= 0xFF;
+  auto other = seeded();
+  ArchiveReader bad(before, "damaged world");
+  EXPECT_THROW(other->loadState(bad), Error);
 }
 
 }  // namespace

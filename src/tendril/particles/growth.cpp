@@ -153,7 +153,13 @@ void ParticleWorld::grow(const env::Environment& env) {
     const ParticleSpecies& s = pl.species;
     const float gdt = dt * s.growthSpeed;  // growth time of this step
     ApexUpdate& u = updates[k];
-    const Vec3 forward = q_[i] * Vec3::UnitY();
+    // The tropisms steer the still-air orientation of an apex grown in wind (Growth-Flow
+    // §3.1.1: the shoot keeps its still-air direction and grows along it turned toward the
+    // wind), so they never undo the wind's turn: its forward vector here is the still-air one,
+    // and the growth rotation found for it is carried into the turned frame at the end.
+    const Quat turn = flow_[i].turn;
+    const bool turned = turn.coeffs() != Quat::Identity().coeffs();
+    const Vec3 forward = turned ? Vec3((turn.conjugate() * q_[i]) * Vec3::UnitY()) : Vec3(q_[i] * Vec3::UnitY());
     Vec3 vf = forward;
 
     // Light (eq. 7's occlusion O counts obstacles by shadow rays and plants by coverage).
@@ -221,7 +227,7 @@ void ParticleWorld::grow(const env::Environment& env) {
       Vec3 axis = vf.cross(r.unitVector());
       if (axis.squaredNorm() > 1e-8f) rg = axisAngle(axis, s.randomWalk * gdt * r.uniform(-1.0f, 1.0f)) * rg;
     }
-    u.growth = rg.normalized();
+    u.growth = turned ? Quat((turn * rg.normalized() * turn.conjugate()).normalized()) : rg.normalized();
   }, 16);
 
   // Sequential: apply in apex order (eq. 8–10), spawn successors, buds and leaves.
@@ -267,10 +273,10 @@ void ParticleWorld::grow(const env::Environment& env) {
     }
     // Growth-Flow (seed 001, Algorithm 1): each new internode is one unit of growth time. In a
     // wind above the species' w_min the internodes that grow from this one are shorter (eq. 8)
-    // and thicker (eq. 7), bear smaller (eq. 17) and thicker (eq. 16) leaves, and turn downwind
-    // by the growth of eq. 9's angle, α_t − α_{t−1}, about b × w (the apex's own tropisms keep
-    // steering it between internodes); leaves are not grown where the wind would tear them off
-    // (Algorithm 2). A calm wind changes nothing.
+    // and thicker (eq. 7), bear smaller (eq. 17) and thicker (eq. 16) leaves, and grow along
+    // their still-air direction b turned by the whole of eq. 9's angle α_t about b × w (their
+    // tropisms keep steering b, see above); leaves are not grown where the wind would tear them
+    // off (Algorithm 2). A calm wind changes nothing.
     wind::GrowthFlowStep flow;
     Vec3 windHere = Vec3::Zero();
     if (!env.windField().settings().calm()) {
@@ -278,12 +284,8 @@ void ParticleWorld::grow(const env::Environment& env) {
       flow = wind::growthStep(windHere.norm(), s.growthFlow);
     }
     FlowState grown = flow_[i];
-    Quat windTurn = Quat::Identity();
     if (flow.active()) {
-      const float before = grown.angle < 0.0f ? 0.0f : grown.angle;
       grown.angle = wind::nextGrowthAngle(grown.angle < 0.0f ? s.growthFlow.angle0 : grown.angle, flow);
-      const Vec3 forward = q_[i] * Vec3::UnitY();
-      windTurn = Quat::FromTwoVectors(forward, wind::windGrowthDirection(forward, windHere, grown.angle - before));
       grown.length *= flow.length;
       grown.leafSize *= flow.leafRadius;
       grown.leafThickness *= flow.leafThickness;
@@ -298,7 +300,14 @@ void ParticleWorld::grow(const env::Environment& env) {
       if (flow.active() && s.growthFlow.maxLength > 0.0f) half = std::min(half, 0.5f * s.growthFlow.maxLength);
       targetHalfLength_[c] = half;
       a_[c] = std::min(a_[c], half);
-      if (flow.active()) q_[c] = qp_[c] = (windTurn * q_[c]).normalized();
+      if (flow.active()) {
+        // The new internode's still-air orientation is its spawned one without the parent's
+        // turn; it grows along that turned by the lineage's whole angle α_t (Algorithm 1).
+        const Quat still = (flow_[i].turn.conjugate() * q_[c]).normalized();
+        const Vec3 b = still * Vec3::UnitY();
+        flow_[c].turn = Quat::FromTwoVectors(b, wind::windGrowthDirection(b, windHere, grown.angle)).normalized();
+        q_[c] = qp_[c] = (flow_[c].turn * still).normalized();
+      }
       qr_[c] = (deformation.conjugate() * q_[c]).normalized();
       groupRotation_[c] = (q_[c] * qr_[c].conjugate()).normalized();
       x_[c] = xp_[c] = head(i) + q_[c] * Vec3(0, a_[c], 0);

@@ -220,12 +220,15 @@ class ParticleWorld {
   // accumulated growth angle α (eq. 9; < 0 before the first windy internode), its length
   // factor (eq. 8, times the species' particle length) and the factors of eq. 17 and 16 its
   // leaves grow with; the radius (eq. 7) lives in b_. Successors and laterals inherit it,
-  // times one step of wind.
+  // times one step of wind. `turn` takes the internode's still-air orientation (the one its
+  // tropisms steer) to the one it grows in: Algorithm 1's rotation by the whole of α about
+  // b × w (identity for a lineage that never grew in wind).
   struct FlowState {
     float angle = -1.0f;
     float length = 1.0f;
     float leafSize = 1.0f;
     float leafThickness = 1.0f;
+    Quat turn = Quat::Identity();
   };
   std::vector<FlowState> flow_;
   std::vector<uint32_t> freeList_;

@@ -10,7 +10,8 @@ namespace tendril::particles {
 
 namespace {
 
-constexpr uint32_t kWorldTag = 0x57505431;  // "1TPW"
+constexpr uint32_t kWorldTag = 0x57505432;        // "2TPW"
+constexpr uint32_t kWorldTagBefore = 0x57505431;  // "1TPW": Growth-Flow records without their turn
 
 }  // namespace
 
@@ -57,8 +58,28 @@ struct SaveField {
 
 struct LoadField {
   ArchiveReader& in;
+  bool flowWithoutTurn = false;  // a world saved as "1TPW"
   template <class T>
   void operator()(std::vector<T>& v) const {
+    if constexpr (requires(T f) { f.turn; f.leafThickness; }) {
+      if (flowWithoutTurn) {
+        // The Growth-Flow records before they carried their turn: the four factors. Their
+        // lineages go on from the orientation they have (no turn recorded).
+        struct Before {
+          float angle, length, leafSize, leafThickness;
+        };
+        std::vector<Before> before;
+        in.vector(before);
+        v.assign(before.size(), T{});
+        for (size_t k = 0; k < before.size(); ++k) {
+          v[k].angle = before[k].angle;
+          v[k].length = before[k].length;
+          v[k].leafSize = before[k].leafSize;
+          v[k].leafThickness = before[k].leafThickness;
+        }
+        return;
+      }
+    }
     in.vector(v);
   }
   template <ArchivePlain T>
@@ -83,7 +104,9 @@ void ParticleWorld::saveState(ArchiveWriter& out) const {
 }
 
 void ParticleWorld::loadState(ArchiveReader& in) {
-  in.tag(kWorldTag, "a particle world");
+  const size_t tagAt = in.position();
+  const uint32_t tag = in.u32();
+  if (tag != kWorldTag && tag != kWorldTagBefore) in.fail(tagAt, "expected the start of a particle world (the data is damaged)");
   const size_t at = in.position();
   const uint64_t n = in.u64();
   if (n != plants_.size())
@@ -95,7 +118,7 @@ void ParticleWorld::loadState(ArchiveReader& in) {
     p.particles = size_t(in.u64());
     p.capped = in.boolean();
   }
-  visitState(*this, LoadField{in});
+  visitState(*this, LoadField{in, tag == kWorldTagBefore});
   // Every per-particle array must have one slot per particle, and links must stay in range:
   // damaged input is an Error here, not a crash in the next step.
   const size_t cap = flags_.size();
