@@ -164,17 +164,16 @@ void ParticleWorld::collideParticles() {
   std::vector<uint32_t>& entries = hashEntries_;
   entries.resize(stems.size());
   {
-    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    std::vector<uint32_t>& fill = hashFill_;
+    fill.assign(start.begin(), start.end() - 1);
     for (size_t k = 0; k < stems.size(); ++k) entries[fill[bucket[k]]++] = stems[k];
   }
-  // What the pair test reads first, packed in table order: cell, centre, reach.
-  struct Packed {
-    Eigen::Vector3i cell;
-    Vec3 x;
-    float reach;
-  };
-  static_assert(sizeof(Packed) == 28);
-  std::vector<Packed> packed(entries.size());
+  // What the pair test reads first, packed in table order: cell, centre, reach. (The scratch
+  // arrays are kept from step to step: at 100k particles, allocating them anew each step cost a
+  // thousand page faults.)
+  static_assert(sizeof(HashPacked) == 28);
+  std::vector<HashPacked>& packed = hashPacked_;
+  packed.resize(entries.size());
   parallelFor(0, entries.size(), [&](size_t e) {
     const uint32_t j = entries[e];
     packed[e] = {cellOf(xp_[j]), xp_[j], a_[j] + b_[j]};
@@ -211,7 +210,7 @@ void ParticleWorld::collideParticles() {
           const Eigen::Vector3i cell = c + Eigen::Vector3i(dx, dy, dz);
           const uint32_t h = spatialHash(cell, mask);
           for (uint32_t e = start[h]; e < start[h + 1]; ++e) {
-            const Packed& q = packed[e];
+            const HashPacked& q = packed[e];
             if (q.cell != cell) continue;
             const float reach = reachI + q.reach;
             if ((q.x - xp_[i]).squaredNorm() > reach * reach) continue;

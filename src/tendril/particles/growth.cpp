@@ -410,7 +410,8 @@ void ParticleWorld::grow(const env::Environment& env) {
 
   // Secondary growth: older particles thicken toward the pipe-model radius of what they carry.
   const size_t n = capacity();
-  std::vector<float> nextRadius(b_.begin(), b_.end());
+  std::vector<float>& nextRadius = nextRadius_;
+  nextRadius.assign(b_.begin(), b_.end());
   parallelFor(0, n, [&](size_t ii) {
     const uint32_t i = uint32_t(ii);
     if (!(flags_[i] & kActive) || (flags_[i] & (kLeaf | kDetached))) return;

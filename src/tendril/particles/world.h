@@ -280,6 +280,16 @@ class ParticleWorld {
   uint64_t topologyVersion_ = 0, pieceOrderVersion_ = ~uint64_t(0);  // links changed / order built for
   std::vector<uint32_t> hashParticles_, hashBucket_, hashStart_, hashEntries_;
   float hashInv_ = 0.0f;  // 1 / cell size of the spatial hash
+  // Scratch of collideParticles(), rewritten before it is read in every step (not saved;
+  // kept from step to step only to spare the allocation).
+  struct HashPacked {
+    Eigen::Vector3i cell;
+    Vec3 x;
+    float reach;
+  };
+  std::vector<uint32_t> hashFill_;
+  std::vector<HashPacked> hashPacked_;
+  std::vector<float> nextRadius_;  // scratch of grow()'s secondary growth (not saved)
 
   // Interaction.
   uint32_t dragParticle_ = kNone;
