@@ -4,7 +4,6 @@
 #include "tendril/core/log.h"
 #include "tendril/env/sdf.h"
 #include "tendril/env/topology.h"
-#include "tendril/env/triangle_bvh.h"
 
 #include <embree3/rtcore.h>
 #include <tbb/task_arena.h>
@@ -57,7 +56,6 @@ struct Environment::ObstacleData {
   std::vector<Vec3> world;  // welded vertices in world space (+1 padding element for Embree)
   std::vector<Vec3> faceNormalWorld;
   std::vector<uint32_t> neighbors;  // triangle adjacency (3 per triangle), for closest-point walks
-  TriangleBvh bvh;                  // local frame, for hinted closest-point queries
   RTCGeometry geometry = nullptr;
   bool moved = true;
   mutable std::once_flag sdfOnce;
@@ -125,35 +123,29 @@ struct ClosestSearch {
   TriangleFeature bestFeature = TriangleFeature::Face;
 };
 
-// Offers triangle `prim` of geometry `geom` to the search: its closest point becomes the best
-// when it is closer, or as close with a lower (geometry, primitive) id, so the answer never
-// depends on the order triangles are offered in. True when it became the best.
-inline bool offerTriangle(ClosestSearch& s, uint32_t geom, uint32_t prim) {
-  const Vec3* v = s.vertices[geom];
-  const uint32_t* tri = s.indices[geom] + 3 * size_t(prim);
-  ClosestOnTriangle c = closestPointOnTriangle(s.p, v[tri[0]], v[tri[1]], v[tri[2]]);
-  float d2 = (c.point - s.p).squaredNorm();
-  if (s.facing && d2 < s.bestDist2) {
-    Vec3 n = (v[tri[1]] - v[tri[0]]).cross(v[tri[2]] - v[tri[0]]);
-    if (n.dot(s.p - c.point) < 0.0f) n = -n;  // the side the query point is on
-    float len = n.norm();
-    if (len > 0.0f && n.dot(*s.facing) > s.cosLimit * len) return false;
-  }
-  bool better = d2 < s.bestDist2 ||
-                (d2 == s.bestDist2 && (geom < s.bestGeom || (geom == s.bestGeom && prim < s.bestPrim)));
-  if (!better) return false;
-  s.bestDist2 = d2;
-  s.bestPoint = c.point;
-  s.bestGeom = geom;
-  s.bestPrim = prim;
-  s.bestFeature = c.feature;
-  return true;
-}
-
 bool closestCallback(RTCPointQueryFunctionArguments* args) {
   auto* s = static_cast<ClosestSearch*>(args->userPtr);
-  if (!offerTriangle(*s, args->geomID, args->primID)) return false;
-  float r = std::sqrt(s->bestDist2);
+  const Vec3* v = s->vertices[args->geomID];
+  const uint32_t* tri = s->indices[args->geomID] + 3 * size_t(args->primID);
+  ClosestOnTriangle c = closestPointOnTriangle(s->p, v[tri[0]], v[tri[1]], v[tri[2]]);
+  float d2 = (c.point - s->p).squaredNorm();
+  if (s->facing && d2 < s->bestDist2) {
+    Vec3 n = (v[tri[1]] - v[tri[0]]).cross(v[tri[2]] - v[tri[0]]);
+    if (n.dot(s->p - c.point) < 0.0f) n = -n;  // the side the query point is on
+    float len = n.norm();
+    if (len > 0.0f && n.dot(*s->facing) > s->cosLimit * len) return false;
+  }
+  // Ties are broken by (geometry, primitive) so the answer never depends on traversal order.
+  bool better = d2 < s->bestDist2 ||
+                (d2 == s->bestDist2 && (args->geomID < s->bestGeom ||
+                                        (args->geomID == s->bestGeom && args->primID < s->bestPrim)));
+  if (!better) return false;
+  s->bestDist2 = d2;
+  s->bestPoint = c.point;
+  s->bestGeom = args->geomID;
+  s->bestPrim = args->primID;
+  s->bestFeature = c.feature;
+  float r = std::sqrt(d2);
   if (r < args->query->radius) {
     args->query->radius = r;
     return true;
@@ -258,7 +250,6 @@ uint32_t Environment::addObstacle(ObstacleDef def) {
               def.name, def.source, topo.boundaryEdges, topo.nonManifoldEdges, topo.inconsistentEdges);
   if (closed) o->normals = computePseudonormals(o->welded);
   o->neighbors = triangleNeighbors(o->welded);
-  o->bvh.build(o->welded.positions, o->welded.indices);
   o->info.name = def.name;
   o->info.kind = def.kind;
   o->info.source = def.source;
@@ -491,48 +482,21 @@ std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, co
     verts[i] = obstacles_[i]->world.data();
     inds[i] = obstacles_[i]->welded.indices.data();
   }
-  // A hinted triangle's distance bounds the search, which is then much cheaper on fine
-  // meshes; the closest point lies inside that sphere, so the answer is the same as for the
-  // full radius. The hint is first improved by walking the mesh toward p, so the sphere is as
-  // tight as the true answer whenever the walk finds it.
+  // A hinted triangle's distance bounds the search: Embree calls back for every triangle the
+  // query sphere overlaps, so a tight sphere is far cheaper on fine meshes. The closest point
+  // lies inside that sphere, so the answer is the same as for the full radius.
+  // The hint is first improved by walking the mesh toward p, so the sphere is as tight as the
+  // true answer whenever the walk finds it.
   float r = radius;
-  bool hinted = false;
   if (hint && hint->obstacle < obstacles_.size() && !direction) {
     const ObstacleData& h = *obstacles_[hint->obstacle];
     if (hint->triangle < h.welded.indices.size() / 3) {
       float d = std::sqrt(walkTowardClosest(h, p, hint->triangle));
       if (d < radius) r = std::min(radius, d * (1.0f + 1e-5f) + 1e-7f);
-      hinted = true;
     }
   }
   ClosestSearch s{verts, inds, p, r * r, direction, cosLimit};
-  if (hinted) {
-    // Within such a small sphere each obstacle's own BVH finds the candidates for a fraction
-    // of an Embree point query (triangles are culled by their own boxes, no callbacks). Every
-    // triangle whose box lies within the best distance so far is offered, and offerTriangle's
-    // order-free rule picks the same answer Embree's query does.
-    for (size_t k = 0; k < obstacles_.size(); ++k) {
-      const ObstacleData& o = *obstacles_[k];
-      if (o.bvh.empty()) continue;
-      // The boxes are in the obstacle's frame: p's local image and the world triangles carry
-      // rounding errors of a few ulps of the coordinates, so the cull keeps a margin above them.
-      const RigidTransform& t = o.info.worldFromLocal;
-      const float margin = 4e-6f * (1.0f + p.cwiseAbs().maxCoeff() + t.translation.cwiseAbs().maxCoeff() +
-                                    o.bvh.bounds().min.cwiseAbs().cwiseMax(o.bvh.bounds().max.cwiseAbs()).maxCoeff());
-      auto reach2 = [&] {
-        const float reach = std::sqrt(s.bestDist2) + margin;
-        return reach * reach;
-      };
-      float cull2 = reach2();
-      if (o.info.worldBounds.squaredDistance(p) > cull2) continue;
-      const Vec3 local = o.localRotation * p + o.localTranslation;
-      o.bvh.forEachNear(local, cull2, [&](uint32_t triangle) {
-        if (offerTriangle(s, uint32_t(k), triangle)) cull2 = reach2();
-      });
-    }
-  } else {
-    runClosest(static_cast<RTCScene>(scene_), s, r);
-  }
+  runClosest(static_cast<RTCScene>(scene_), s, r);
   if (s.bestGeom == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   const ObstacleData& o = *obstacles_[s.bestGeom];
   SurfacePoint sp;

@@ -138,10 +138,8 @@ class Environment {
   // Closest obstacle surface point within `radius` of p (Embree point query).
   std::optional<SurfacePoint> closestPoint(const Vec3& p, float radius) const;
   // The same, with a hint: a triangle that is probably (not necessarily) the closest, e.g. the
-  // answer for a nearby point. Its distance bounds the search, which then runs on each
-  // obstacle's own BVH (triangle_bvh.h) and is much cheaper on fine meshes. The answer is the
-  // closest triangle within `radius`, ties going to the lowest (obstacle, triangle) ids — the
-  // same on every CPU (Embree's point query, used without a hint, can differ between ISAs).
+  // answer for a nearby point. Its distance bounds the search, which is then much cheaper on
+  // fine meshes; the answer is exactly that of closestPoint(p, radius).
   std::optional<SurfacePoint> closestPoint(const Vec3& p, float radius, const SurfacePoint* hint) const;
   // The same, ignoring triangles that face `direction`: those whose normal (turned toward p)
   // has n·direction > cosLimit. A shoot growing away from a surface is not held by it.
