@@ -130,8 +130,8 @@ class Environment {
   // First hit along origin + t·dir for t in [tMin, tMax] (dir unit length).
   std::optional<RayHit> rayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin = 0.0f) const;
   bool occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin = 0.0f) const;
-  // True if any of the n segments from[i]–to[i] touches an obstacle. Traced as 8-wide
-  // packets, several times cheaper than one rayCast per segment for short batches.
+  // True if any of the n segments from[i]–to[i] touches an obstacle: one occlusion ray per
+  // segment (no hit point is computed), stopping at the first that is blocked.
   bool anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) const;
   // Number of surface crossings on the segment a-b (0 = the segment touches no obstacle).
   size_t countSegmentHits(const Vec3& a, const Vec3& b) const;

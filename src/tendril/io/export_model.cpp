@@ -133,9 +133,22 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
   std::vector<std::exception_ptr> failed(specs.size());
   tbb::parallel_invoke(
       [&] {
-        model.plantMeshes.resize(scene.plants.size());
-        for (size_t i = 0; i < scene.plants.size(); ++i)
-          model.plantMeshes[i] = mesh::buildPlantMesh(scene.plants[i], options.mesh);
+        // Plants are meshed in parallel too: a climbing scene is hundreds of plants of a
+        // thousand segments, too small for the sweep's own parallel loops to keep both cores
+        // busy. Each mesh depends on its plant only; the first failing plant (by index) is
+        // the one reported, as when they were meshed in order.
+        const size_t n = scene.plants.size();
+        model.plantMeshes.resize(n);
+        std::vector<std::exception_ptr> meshFailed(n);
+        parallelFor(0, n, [&](size_t i) {
+          try {
+            model.plantMeshes[i] = mesh::buildPlantMesh(scene.plants[i], options.mesh);
+          } catch (...) {
+            meshFailed[i] = std::current_exception();
+          }
+        }, 1);
+        for (const std::exception_ptr& e : meshFailed)
+          if (e) std::rethrow_exception(e);
       },
       [&] {
         parallelFor(0, specs.size(), [&](size_t i) {
