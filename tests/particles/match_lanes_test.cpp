@@ -71,7 +71,10 @@ TEST(MatchLanes, MomentTermsAndRotationExtractionMatchTheScalarFit) {
     Mat3 a[4], m[4];
     Vec3 d[4], v[4];
     Quat q[4];
-    for (int l = 0; l < 4; ++l) a[l] = in.mat(1e-3f), m[l] = in.mat(1e-3f), d[l] = in.vec(0.05f), v[l] = in.vec(0.05f), q[l] = in.quat();
+    for (int l = 0; l < 4; ++l) {
+      a[l] = in.mat(1e-3f), m[l] = in.mat(1e-3f);
+      d[l] = in.vec(0.05f), v[l] = in.vec(0.05f), q[l] = in.quat();
+    }
     // A group already at rest: the extraction's step is below its threshold and q stays.
     a[1] = q[1].toRotationMatrix() * Vec3(1e-3f, 2e-3f, 1e-3f).asDiagonal();
     M3 A = pack(a[0], a[1], a[2], a[3]);

@@ -454,7 +454,8 @@ TEST(ParticleWorld, WorldsSavedBeforeTheWindTurnStillLoad) {
   const uint32_t size16 = 16, tag1 = 0x57505431u;
   before.insert(before.end(), reinterpret_cast<const uint8_t*>(&size16), reinterpret_cast<const uint8_t*>(&size16) + 4);
   for (size_t k = 0; k < n; ++k)
-    before.insert(before.end(), reinterpret_cast<const uint8_t*>(record), reinterpret_cast<const uint8_t*>(record) + 16);
+    before.insert(before.end(), reinterpret_cast<const uint8_t*>(record),
+                  reinterpret_cast<const uint8_t*>(record) + 16);
   before.insert(before.end(), now.begin() + std::ptrdiff_t(found + 12 + n * 32), now.end());
   std::memcpy(before.data(), &tag1, 4);
 

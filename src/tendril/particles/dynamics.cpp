@@ -220,7 +220,8 @@ void ParticleWorld::shapeMatch() {
     const F4 ownWeight = pack(r[0]->ownWeight, r[1]->ownWeight, r[2]->ownWeight, r[3]->ownWeight);
     const F4 parentWeight = pack(r[0]->parentWeight, r[1]->parentWeight, r[2]->parentWeight, r[3]->parentWeight);
     const Q4 parentFrame = pack(p[0]->frame, p[1]->frame, p[2]->frame, p[3]->frame);
-    const V3 xg = ownWeight * (rotate(own, restOffset) + center) + parentWeight * (rotate(parentFrame, fromParent) + px);
+    const V3 xg =
+        ownWeight * (rotate(own, restOffset) + center) + parentWeight * (rotate(parentFrame, fromParent) + px);
     const Q4 Rp = select(dot4(parentFrame, own) < 0.0f, negate(parentFrame), parentFrame);
     const Q4 rotation = normalized({ownWeight * own.x + parentWeight * Rp.x, ownWeight * own.y + parentWeight * Rp.y,
                                     ownWeight * own.z + parentWeight * Rp.z, ownWeight * own.w + parentWeight * Rp.w});
@@ -231,11 +232,13 @@ void ParticleWorld::shapeMatch() {
     Q4 qg = rotation * qr;
     qg = select(dot4(qg, nq) < 0.0f, negate(qg), qg);
     const F4 keep = 1.0f - s;
-    const Q4 q = normalized({keep * nq.x + s * qg.x, keep * nq.y + s * qg.y, keep * nq.z + s * qg.z, keep * nq.w + s * qg.w});
+    const Q4 q =
+        normalized({keep * nq.x + s * qg.x, keep * nq.y + s * qg.y, keep * nq.z + s * qg.z, keep * nq.w + s * qg.w});
     xn = xn + pack(r[0]->phi, r[1]->phi, r[2]->phi, r[3]->phi) *
                   (pack(r[0]->anchor, r[1]->anchor, r[2]->anchor, r[3]->anchor) - xn);  // eq. 5
     const Q4 frame = q * conjugate(qr);
-    const M3 moment = toRotationMatrix(q) * pack(r[0]->restMoment, r[1]->restMoment, r[2]->restMoment, r[3]->restMoment);
+    const M3 moment =
+        toRotationMatrix(q) * pack(r[0]->restMoment, r[1]->restMoment, r[2]->restMoment, r[3]->restMoment);
     for (int l = 0; l < 4; ++l) {
       n[l]->x = lane(xn, l);
       n[l]->q = lane(q, l);

@@ -103,9 +103,10 @@ inline V3 column(const M3& a, int j) { return {a.m[0][j], a.m[1][j], a.m[2][j]};
 // extractRotation(A, q, 1) of dynamics.cpp (Müller et al. 2016, one iteration).
 inline Q4 extractRotationOnce(const M3& A, const Q4& q) {
   const M3 R = toRotationMatrix(q);
-  V3 omega = (cross(column(R, 0), column(A, 0)) + cross(column(R, 1), column(A, 1))) + cross(column(R, 2), column(A, 2));
-  const F4 scale =
-      abs4((dot(column(R, 0), column(A, 0)) + dot(column(R, 1), column(A, 1))) + dot(column(R, 2), column(A, 2))) + 1e-9f;
+  V3 omega =
+      (cross(column(R, 0), column(A, 0)) + cross(column(R, 1), column(A, 1))) + cross(column(R, 2), column(A, 2));
+  const F4 dots = (dot(column(R, 0), column(A, 0)) + dot(column(R, 1), column(A, 1))) + dot(column(R, 2), column(A, 2));
+  const F4 scale = abs4(dots) + 1e-9f;
   omega = {omega.x / scale, omega.y / scale, omega.z / scale};
   const F4 w = sqrt4(dot(omega, omega));
   const F4 half = 0.5f * w;

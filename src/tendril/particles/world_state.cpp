@@ -19,9 +19,9 @@ constexpr uint32_t kWorldTagBefore = 0x57505431;  // "1TPW": Growth-Flow records
 // the shape-matching and hash caches) go in as raw blocks, so a field added to such a record is
 // covered; a new member of ParticleWorld must be added here, except per-step scratch that is
 // rewritten before it is read (hashFill_, hashPacked_, nextRadius_). The caches are written too
-// (it is cheaper than proving that rebuilding them gives the same bits); only the obstacle-clearance
-// proof is dropped on load (clearanceEnv_), which is exact: it only skips distance samples
-// that could not push a particle (collideObstacles()).
+// (it is cheaper than proving that rebuilding them gives the same bits); only the
+// obstacle-clearance proof is dropped on load (clearanceEnv_), which is exact: it only skips
+// distance samples that could not push a particle (collideObstacles()).
 template <class Self, class Visit>
 void ParticleWorld::visitState(Self& w, Visit&& v) {
   v(w.settings_);
@@ -107,7 +107,8 @@ void ParticleWorld::saveState(ArchiveWriter& out) const {
 void ParticleWorld::loadState(ArchiveReader& in) {
   const size_t tagAt = in.position();
   const uint32_t tag = in.u32();
-  if (tag != kWorldTag && tag != kWorldTagBefore) in.fail(tagAt, "expected the start of a particle world (the data is damaged)");
+  if (tag != kWorldTag && tag != kWorldTagBefore)
+    in.fail(tagAt, "expected the start of a particle world (the data is damaged)");
   const size_t at = in.position();
   const uint64_t n = in.u64();
   if (n != plants_.size())
