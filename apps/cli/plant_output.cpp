@@ -57,8 +57,15 @@ std::vector<std::string> writePlantFiles(const session::Session& session, const 
       exportScene.meshes.push_back(std::move(m));
     }
   }
-  io::ExportModel model = io::buildExportModel(exportScene, options);
   std::vector<std::string> written;
+  if (formats.size() == 1 && formats.count("glb")) {
+    // Alone, the .glb streams plant by plant (gltf_writer.h): less memory, and faster.
+    io::writeGlb(exportScene, outDir / (stem + ".glb"), options);
+    written.push_back((outDir / (stem + ".glb")).string());
+    return written;
+  }
+  // Both formats write the meshes of one model.
+  io::ExportModel model = io::buildExportModel(exportScene, options);
   if (formats.count("glb")) {
     io::writeGlb(model, outDir / (stem + ".glb"));
     written.push_back((outDir / (stem + ".glb")).string());

@@ -212,6 +212,57 @@ TEST(IoGlb, BytesDoNotDependOnThreadCount) {
   EXPECT_EQ(one, readFileBytes(dir / "all.glb"));
 }
 
+// A .glb's two chunks: the JSON text without its padding, and the binary chunk.
+struct GlbChunks {
+  uint32_t jsonChunkBytes = 0;
+  std::string json;
+  std::vector<uint8_t> bin;
+};
+
+GlbChunks readGlb(const fs::path& path) {
+  std::vector<uint8_t> b = readFileBytes(path);
+  GlbChunks c;
+  auto u32 = [&](size_t at) {
+    uint32_t v;
+    std::memcpy(&v, b.data() + at, 4);
+    return v;
+  };
+  EXPECT_EQ(u32(8), b.size());
+  c.jsonChunkBytes = u32(12);
+  c.json.assign(b.begin() + 20, b.begin() + 20 + c.jsonChunkBytes);
+  c.json.erase(c.json.find_last_not_of(' ') + 1);
+  const size_t bin = 20 + size_t(c.jsonChunkBytes);
+  if (bin < b.size()) {
+    EXPECT_EQ(size_t(u32(bin)) + bin + 8, b.size());
+    c.bin.assign(b.begin() + bin + 8, b.end());
+  }
+  return c;
+}
+
+// A scene's .glb is written plant by plant (the JSON chunk last, into room reserved before the
+// geometry): the same JSON and the same binary chunk as when the whole model is built first.
+TEST(IoGlb, StreamedFileMatchesTheWholeModelsFile) {
+  fs::path dir = meshtest::exportTestDir();
+  ExportScene scene = testScene();
+  scene.plants.push_back(meshtest::syntheticIvy(3000));  // 32-bit indices
+  PlantModel second = meshtest::syntheticIvy(200);
+  second.name = std::string(300, '"');  // a name every byte of which is escaped
+  scene.plants.push_back(second);
+  scene.meshes[0].name = std::string(200, '\x01');
+  writeGlb(scene, dir / "streamed.glb");
+  writeGlb(buildExportModel(scene, ExportOptions{}), dir / "whole.glb");
+  expectValid(dir / "streamed.glb");
+  GlbChunks streamed = readGlb(dir / "streamed.glb"), whole = readGlb(dir / "whole.glb");
+  EXPECT_EQ(streamed.json, whole.json);
+  EXPECT_EQ(streamed.bin, whole.bin);
+  // The streamed file's JSON chunk is the reserved room (the whole model's is padded to 4
+  // bytes at most): it was streamed, not written again the simple way.
+  EXPECT_GT(streamed.jsonChunkBytes, streamed.json.size() + 3);
+  EXPECT_LE(whole.jsonChunkBytes, whole.json.size() + 3);
+  // The room is generous, but not wasteful: under twice the JSON here.
+  EXPECT_LT(streamed.jsonChunkBytes, 2 * streamed.json.size());
+}
+
 TEST(IoGlb, BadTextureIsAnErrorAndTheOldFileSurvives) {
   fs::path dir = meshtest::exportTestDir();
   writeFileAtomic(dir / "scene.glb", std::string_view("old content"));

@@ -99,6 +99,22 @@ void AtomicFileWriter::write(const void* data, size_t bytes) {
   }
 }
 
+void AtomicFileWriter::writeAt(uint64_t offset, const void* data, size_t bytes) {
+  if (fd_ < 0 || committed_) throw Error(path_.string(), "", "cannot write: the file is already closed");
+  flushBuffer();
+  const char* p = static_cast<const char*>(data);
+  while (bytes > 0) {
+    ssize_t n = ::pwrite(fd_, p, bytes, static_cast<off_t>(offset));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("cannot write: " + errnoText(errno));
+    }
+    p += n;
+    offset += static_cast<uint64_t>(n);
+    bytes -= static_cast<size_t>(n);
+  }
+}
+
 void AtomicFileWriter::commit() {
   if (fd_ < 0 || committed_) throw Error(path_.string(), "", "cannot write: the file is already closed");
   flushBuffer();

@@ -27,6 +27,9 @@ class AtomicFileWriter {
   void write(const void* data, size_t bytes);
   void write(std::string_view text) { write(text.data(), text.size()); }
   void write(std::span<const uint8_t> bytes) { write(bytes.data(), bytes.size()); }
+  // Writes `bytes` at `offset` of the file (after flushing what is buffered), for headers whose
+  // content is known only at the end; the sequential position and bytesWritten() are unchanged.
+  void writeAt(uint64_t offset, const void* data, size_t bytes);
   // Flushes, closes and renames the temporary over the target.
   void commit();
 

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <exception>
 #include <filesystem>
@@ -124,53 +125,48 @@ TriangleMesh preparedMesh(const NamedMesh& named) {
 
 }  // namespace
 
-ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& options) {
+PlantParts plantParts(const mesh::PlantMesh& mesh) {
+  PlantParts parts;
+  parts.bark = !mesh.bark.empty();
+  for (const TriangleMesh& m : mesh.leaves) parts.leaves.push_back(m.empty() ? 0 : 1);
+  for (const mesh::PrimitiveGroup& g : mesh.primitives) {
+    parts.primitives.push_back({g.name, g.color, g.texture, {}});
+    parts.primitiveTriangles.push_back(g.mesh.empty() ? 0 : 1);
+  }
+  return parts;
+}
+
+TexturePreload preloadTextures(const ExportScene& scene) {
+  TexturePreload t;
+  t.specs = textureSpecs(scene);
+  t.loaded.resize(t.specs.size());
+  t.failed.resize(t.specs.size());
+  parallelFor(0, t.specs.size(), [&](size_t i) {
+    try {
+      t.loaded[i] = loadEncodedTexture(t.specs[i]);
+    } catch (...) {
+      t.failed[i] = std::current_exception();
+    }
+  }, 1);
+  return t;
+}
+
+ExportModel assembleExportModel(const ExportScene& scene, const std::vector<PlantParts>& parts,
+                                TexturePreload& textures) {
+  assert(parts.size() == scene.plants.size());
   ExportModel model;
-  // Textures load (or are generated) while the plants are meshed: both take a while for a
-  // large scene and neither needs the other.
-  std::vector<std::string> specs = textureSpecs(scene);
-  std::vector<EncodedImage> loaded(specs.size());
-  std::vector<std::exception_ptr> failed(specs.size());
-  tbb::parallel_invoke(
-      [&] {
-        // Plants are meshed in parallel too: a climbing scene is hundreds of plants of a
-        // thousand segments, too small for the sweep's own parallel loops to keep both cores
-        // busy. Each mesh depends on its plant only; the first failing plant (by index) is
-        // the one reported, as when they were meshed in order.
-        const size_t n = scene.plants.size();
-        model.plantMeshes.resize(n);
-        std::vector<std::exception_ptr> meshFailed(n);
-        parallelFor(0, n, [&](size_t i) {
-          try {
-            model.plantMeshes[i] = mesh::buildPlantMesh(scene.plants[i], options.mesh);
-          } catch (...) {
-            meshFailed[i] = std::current_exception();
-          }
-        }, 1);
-        for (const std::exception_ptr& e : meshFailed)
-          if (e) std::rethrow_exception(e);
-      },
-      [&] {
-        parallelFor(0, specs.size(), [&](size_t i) {
-          try {
-            loaded[i] = loadEncodedTexture(specs[i]);
-          } catch (...) {
-            failed[i] = std::current_exception();
-          }
-        }, 1);
-      });
   model.extraMeshes.reserve(scene.meshes.size());
   for (const NamedMesh& m : scene.meshes) model.extraMeshes.push_back(preparedMesh(m));
 
   // Materials and textures are created when a non-empty part needs them, so that nothing in
   // the file is unused.
-  ModelBuilder builder(model, specs, loaded, failed);
+  ModelBuilder builder(model, textures.specs, textures.loaded, textures.failed);
   for (size_t i = 0; i < scene.plants.size(); ++i) {
     const plant::PlantModel& p = scene.plants[i];
-    const mesh::PlantMesh& pm = model.plantMeshes[i];
+    const PlantParts& pm = parts[i];
     ExportObject object;
     object.name = p.name.empty() ? fmt::format("plant-{}", i) : p.name;
-    if (!pm.bark.empty()) {
+    if (pm.bark) {
       ExportMaterial m;
       m.kind = Kind::Bark;
       m.name = "bark";
@@ -182,10 +178,10 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       } else {
         m.texture = builder.texture(p.bark.texture, true);  // the texture carries the colour
       }
-      object.parts.push_back({"bark", &pm.bark, builder.material(std::move(m))});
+      object.parts.push_back({"bark", nullptr, builder.material(std::move(m)), PartSource::Bark, 0});
     }
     for (size_t s = 0; s < pm.leaves.size(); ++s) {
-      if (pm.leaves[s].empty()) continue;
+      if (!pm.leaves[s]) continue;
       plant::LeafShape shape = mesh::leafShapeFor(p, s);
       ExportMaterial m;
       m.kind = Kind::Leaf;
@@ -195,16 +191,19 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       m.texture = builder.texture(shape.texture, false);
       m.alphaMask = true;
       m.doubleSided = true;
-      object.parts.push_back({fmt::format("leaves-{}", s), &pm.leaves[s], builder.material(std::move(m))});
+      object.parts.push_back({fmt::format("leaves-{}", s), nullptr, builder.material(std::move(m)),
+                              PartSource::Leaves, uint32_t(s)});
     }
-    for (const mesh::PrimitiveGroup& g : pm.primitives) {
-      if (g.mesh.empty()) continue;
+    for (size_t k = 0; k < pm.primitives.size(); ++k) {
+      if (!pm.primitiveTriangles[k]) continue;
+      const mesh::PrimitiveGroup& g = pm.primitives[k];
       ExportMaterial m;
       m.name = g.name.empty() ? std::string("primitive") : g.name;
       m.baseColor = clampedColor(g.color, object.name, "primitive " + m.name);
       m.roughness = 0.8f;
       if (!g.texture.empty()) m.texture = builder.texture(g.texture, true);
-      object.parts.push_back({m.name, &g.mesh, builder.material(m)});
+      std::string name = m.name;
+      object.parts.push_back({name, nullptr, builder.material(std::move(m)), PartSource::Primitive, uint32_t(k)});
     }
     model.objects.push_back(std::move(object));
   }
@@ -217,10 +216,51 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       m.name = object.name;
       m.baseColor = clampedColor(n.color, object.name, "colour");
       m.roughness = 0.8f;
-      object.parts.push_back({object.name, &model.extraMeshes[i], builder.material(std::move(m))});
+      object.parts.push_back({object.name, &model.extraMeshes[i], builder.material(std::move(m)), PartSource::Mesh,
+                              uint32_t(i)});
     }
     model.objects.push_back(std::move(object));
   }
+  return model;
+}
+
+ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& options) {
+  // Textures load (or are generated) while the plants are meshed: both take a while for a
+  // large scene and neither needs the other.
+  std::vector<mesh::PlantMesh> meshes;
+  TexturePreload textures;
+  tbb::parallel_invoke(
+      [&] {
+        // Plants are meshed in parallel too: a climbing scene is hundreds of plants of a
+        // thousand segments, too small for the sweep's own parallel loops to keep both cores
+        // busy. Each mesh depends on its plant only; the first failing plant (by index) is
+        // the one reported, as when they were meshed in order.
+        const size_t n = scene.plants.size();
+        meshes.resize(n);
+        std::vector<std::exception_ptr> meshFailed(n);
+        parallelFor(0, n, [&](size_t i) {
+          try {
+            meshes[i] = mesh::buildPlantMesh(scene.plants[i], options.mesh);
+          } catch (...) {
+            meshFailed[i] = std::current_exception();
+          }
+        }, 1);
+        for (const std::exception_ptr& e : meshFailed)
+          if (e) std::rethrow_exception(e);
+      },
+      [&] { textures = preloadTextures(scene); });
+  std::vector<PlantParts> parts;
+  parts.reserve(meshes.size());
+  for (const mesh::PlantMesh& m : meshes) parts.push_back(plantParts(m));
+  ExportModel model = assembleExportModel(scene, parts, textures);
+  model.plantMeshes = std::move(meshes);
+  for (size_t i = 0; i < scene.plants.size(); ++i)
+    for (ExportPart& part : model.objects[i].parts) {
+      const mesh::PlantMesh& pm = model.plantMeshes[i];
+      part.mesh = part.source == PartSource::Bark     ? &pm.bark
+                  : part.source == PartSource::Leaves ? &pm.leaves[part.index]
+                                                      : &pm.primitives[part.index].mesh;
+    }
   return model;
 }
 

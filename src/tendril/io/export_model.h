@@ -7,6 +7,8 @@
 #include "tendril/io/texture.h"
 #include "tendril/mesh/plant_mesh.h"
 
+#include <cstdint>
+#include <exception>
 #include <string>
 #include <vector>
 
@@ -34,10 +36,16 @@ struct ExportMaterial {
   bool doubleSided = false;
 };
 
+// Where a part's triangles come from: its object's plant mesh (bark, the leaves of one shape,
+// one primitive group) or, for an extra mesh's object, that mesh.
+enum class PartSource : uint8_t { Bark, Leaves, Primitive, Mesh };
+
 struct ExportPart {
   std::string name;            // "bark", "leaves-0", a primitive or mesh name
-  const TriangleMesh* mesh = nullptr;  // points into ExportModel; never empty
+  const TriangleMesh* mesh = nullptr;  // points into ExportModel; never empty (null in an assembled model)
   int material = 0;
+  PartSource source = PartSource::Mesh;
+  uint32_t index = 0;  // leaf shape id (Leaves) or primitive group (Primitive)
 };
 
 struct ExportObject {
@@ -63,5 +71,31 @@ struct ExportModel {
 
 // Throws Error for invalid plants or options and for textures that cannot be read.
 ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& options);
+
+// What the objects, parts and materials depend on of a plant's meshes: which parts have
+// triangles (their geometry is not needed).
+struct PlantParts {
+  bool bark = false;
+  std::vector<uint8_t> leaves;                   // per leaf shape id: 1 if it has triangles
+  std::vector<mesh::PrimitiveGroup> primitives;  // name, colour and texture (meshes left empty)
+  std::vector<uint8_t> primitiveTriangles;       // per group: 1 if it has triangles
+};
+PlantParts plantParts(const mesh::PlantMesh& mesh);
+
+// The textures a scene's plants use, loaded in parallel ahead of the model that needs them; a
+// texture that fails is reported when a part first uses it.
+struct TexturePreload {
+  std::vector<std::string> specs;
+  std::vector<EncodedImage> loaded;
+  std::vector<std::exception_ptr> failed;
+};
+TexturePreload preloadTextures(const ExportScene& scene);
+
+// Materials, textures, images, extra meshes and objects for a scene whose plants' meshes have
+// `parts` (one per plant), as buildExportModel makes them, but without plant meshes: parts of
+// plants have a null `mesh` (the streaming .glb writer meshes plants one at a time and keeps
+// none). Takes the preloaded textures it uses. Throws as buildExportModel.
+ExportModel assembleExportModel(const ExportScene& scene, const std::vector<PlantParts>& parts,
+                                TexturePreload& textures);
 
 }  // namespace tendril::io

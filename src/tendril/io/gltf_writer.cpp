@@ -4,13 +4,18 @@
 #include "tendril/core/parallel.h"
 #include "tendril/io/atomic_file.h"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_pipeline.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 #include <tiny_gltf.h>
 
 #include <algorithm>
 #include <bit>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 namespace tendril::io {
@@ -73,11 +78,6 @@ void writeJob(const CopyJob& job, AtomicFileWriter& out, std::vector<uint8_t>& s
   }
 }
 
-void writeU32(AtomicFileWriter& out, uint32_t v) {
-  uint8_t b[4] = {uint8_t(v), uint8_t(v >> 8), uint8_t(v >> 16), uint8_t(v >> 24)};  // little-endian
-  out.write(b, 4);
-}
-
 Bounds3 parallelBounds(const std::vector<Vec3>& points) {
   constexpr size_t kChunk = size_t(1) << 15;
   size_t chunks = (points.size() + kChunk - 1) / kChunk;
@@ -126,41 +126,57 @@ class GlbBuilder {
   size_t size_ = 0;
 };
 
-tinygltf::Primitive addPart(const ExportPart& part, GlbBuilder& b, tinygltf::Model& gltf, std::vector<CopyJob>& jobs) {
-  const TriangleMesh& m = *part.mesh;
-  size_t n = m.positions.size();
+// What the JSON says of a part's arrays.
+struct PartGeometry {
+  size_t vertices = 0, indices = 0;
+  bool normals = false, uvs = false;
+  Bounds3 bounds;
+};
+
+PartGeometry geometryOf(const TriangleMesh& m) {
+  return {m.positions.size(), m.indices.size(), !m.normals.empty(), !m.uvs.empty(), parallelBounds(m.positions)};
+}
+
+// uint16 indices when they fit; 65535 itself is the primitive-restart value and not allowed.
+bool smallIndices(size_t vertices) { return vertices < 65536; }
+
+// The part's views and accessors, in the order its bytes are written: positions, normals,
+// uvs, indices. With `mesh`, the copy jobs that write them.
+tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBuilder& b, tinygltf::Model& gltf,
+                            const TriangleMesh* mesh, std::vector<CopyJob>* jobs) {
+  const size_t n = g.vertices;
   tinygltf::Primitive prim;
   prim.mode = TINYGLTF_MODE_TRIANGLES;
   prim.material = part.material;
 
   int pv = b.view(n * sizeof(Vec3), kArrayBuffer);
   int pa = b.accessor(pv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
-  Bounds3 bounds = parallelBounds(m.positions);
-  gltf.accessors[pa].minValues = {bounds.min.x(), bounds.min.y(), bounds.min.z()};
-  gltf.accessors[pa].maxValues = {bounds.max.x(), bounds.max.y(), bounds.max.z()};
-  jobs.push_back({CopyJob::Kind::Bytes, m.positions.data(), n * sizeof(Vec3), b.offsetOf(pv)});
+  gltf.accessors[pa].minValues = {g.bounds.min.x(), g.bounds.min.y(), g.bounds.min.z()};
+  gltf.accessors[pa].maxValues = {g.bounds.max.x(), g.bounds.max.y(), g.bounds.max.z()};
+  if (mesh) jobs->push_back({CopyJob::Kind::Bytes, mesh->positions.data(), n * sizeof(Vec3), b.offsetOf(pv)});
   prim.attributes["POSITION"] = pa;
 
-  if (!m.normals.empty()) {
+  if (g.normals) {
     int nv = b.view(n * sizeof(Vec3), kArrayBuffer);
     prim.attributes["NORMAL"] = b.accessor(nv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
-    jobs.push_back({CopyJob::Kind::Bytes, m.normals.data(), n * sizeof(Vec3), b.offsetOf(nv)});
+    if (mesh) jobs->push_back({CopyJob::Kind::Bytes, mesh->normals.data(), n * sizeof(Vec3), b.offsetOf(nv)});
   }
-  if (!m.uvs.empty()) {
+  if (g.uvs) {
     int tv = b.view(n * sizeof(Vec2), kArrayBuffer);
     prim.attributes["TEXCOORD_0"] = b.accessor(tv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, n);
-    jobs.push_back({CopyJob::Kind::FlipUv, m.uvs.data(), n, b.offsetOf(tv)});
+    if (mesh) jobs->push_back({CopyJob::Kind::FlipUv, mesh->uvs.data(), n, b.offsetOf(tv)});
   }
-  // uint16 indices when they fit; 65535 itself is the primitive-restart value and not allowed.
-  bool small = n < 65536;
-  size_t ni = m.indices.size();
+  const bool small = smallIndices(n);
+  const size_t ni = g.indices;
   int iv = b.view(ni * (small ? 2 : 4), kElementArrayBuffer);
   prim.indices = b.accessor(iv, small ? TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT : TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
                             TINYGLTF_TYPE_SCALAR, ni);
-  if (small)
-    jobs.push_back({CopyJob::Kind::Index16, m.indices.data(), ni, b.offsetOf(iv)});
-  else
-    jobs.push_back({CopyJob::Kind::Bytes, m.indices.data(), ni * sizeof(uint32_t), b.offsetOf(iv)});
+  if (mesh) {
+    if (small)
+      jobs->push_back({CopyJob::Kind::Index16, mesh->indices.data(), ni, b.offsetOf(iv)});
+    else
+      jobs->push_back({CopyJob::Kind::Bytes, mesh->indices.data(), ni * sizeof(uint32_t), b.offsetOf(iv)});
+  }
   return prim;
 }
 
@@ -204,22 +220,31 @@ void appendMaterialsAndTextures(const ExportModel& model, tinygltf::Model& gltf)
   }
 }
 
-void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
-  tinygltf::Model gltf;
+namespace {
+
+// The glTF of a model (everything but the bytes): nodes, meshes and their parts' views and
+// accessors, materials, textures, images. geometry(o, p) describes part p of object o;
+// imageBytes[i] is the encoded size of image i. Views are laid out in the order the bytes are
+// written: every part in object order, then the images. With `jobs`, the copy jobs that write
+// them (every part then needs its mesh).
+template <class Geometry>
+void describe(const ExportModel& model, Geometry&& geometry, const std::vector<size_t>& imageBytes,
+              GlbBuilder& builder, tinygltf::Model& gltf, std::vector<CopyJob>* jobs) {
   gltf.asset.version = "2.0";
   gltf.asset.generator = "Tendril " TENDRIL_VERSION;
-  GlbBuilder builder(gltf);
-  std::vector<CopyJob> jobs;
-
   tinygltf::Scene scene;
   scene.name = "Tendril";  // also keeps an empty scene an object rather than null
-  for (const ExportObject& object : model.objects) {
+  for (size_t o = 0; o < model.objects.size(); ++o) {
+    const ExportObject& object = model.objects[o];
     tinygltf::Node node;
     node.name = object.name;
     if (!object.parts.empty()) {
       tinygltf::Mesh mesh;
       mesh.name = object.name;
-      for (const ExportPart& part : object.parts) mesh.primitives.push_back(addPart(part, builder, gltf, jobs));
+      for (size_t p = 0; p < object.parts.size(); ++p) {
+        const ExportPart& part = object.parts[p];
+        mesh.primitives.push_back(addPart(part, geometry(o, p), builder, gltf, jobs ? part.mesh : nullptr, jobs));
+      }
       gltf.meshes.push_back(std::move(mesh));
       node.mesh = static_cast<int>(gltf.meshes.size() - 1);
     }
@@ -230,45 +255,86 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
   gltf.defaultScene = 0;
 
   appendMaterialsAndTextures(model, gltf);
-  for (const ExportImage& img : model.images) {
+  for (size_t i = 0; i < model.images.size(); ++i) {
+    const ExportImage& img = model.images[i];
     tinygltf::Image image;
     image.name = std::filesystem::path(img.spec).filename().string();
     image.mimeType = img.image.mimeType;
-    image.bufferView = builder.view(img.image.bytes.size(), 0);
-    jobs.push_back({CopyJob::Kind::Bytes, img.image.bytes.data(), img.image.bytes.size(),
-                    builder.offsetOf(image.bufferView)});
+    image.bufferView = builder.view(imageBytes[i], 0);
+    if (jobs)
+      jobs->push_back({CopyJob::Kind::Bytes, img.image.bytes.data(), imageBytes[i], builder.offsetOf(image.bufferView)});
     gltf.images.push_back(std::move(image));
   }
+}
 
-  // tinygltf serialises the glTF JSON; the one buffer (the GLB's BIN chunk) is added here
-  // and the container written directly, streaming every view from the meshes, so that the
-  // geometry is never copied into a second in-memory buffer (hundreds of MB for a large plant).
+std::vector<size_t> imageSizes(const ExportModel& model) {
+  std::vector<size_t> sizes;
+  for (const ExportImage& img : model.images) sizes.push_back(img.image.bytes.size());
+  return sizes;
+}
+
+// The JSON chunk's text (unpadded): tinygltf serialises the glTF; the one buffer (the GLB's BIN
+// chunk, `binBytes` long) is added here, as the container is written by us.
+std::string glbJson(tinygltf::Model& gltf, size_t binBytes, const std::filesystem::path& path) {
   std::ostringstream text;
   tinygltf::TinyGLTF tiny;
   if (!tiny.WriteGltfSceneToStream(&gltf, text, false, false))
     throw Error(path.string(), "", "cannot write .glb: tinygltf could not serialise the scene");
   nlohmann::json json = nlohmann::json::parse(text.str());
-  size_t binBytes = builder.size();
   if (binBytes > 0) json["buffers"] = nlohmann::json::array({{{"byteLength", binBytes}}});
-  std::string content = json.dump();
-  content.resize(align4(content.size()), ' ');  // the JSON chunk is padded with spaces
-  uint64_t total = 12 + 8 + content.size() + (binBytes > 0 ? 8 + binBytes : 0);
+  return json.dump();
+}
+
+void appendU32(std::string& s, uint64_t v) {
+  for (int k = 0; k < 4; ++k) s.push_back(static_cast<char>(uint8_t(v >> (8 * k))));  // little-endian
+}
+
+// The GLB header and the JSON chunk's header, for `jsonBytes` (padded, a multiple of 4) of
+// JSON followed by a BIN chunk of `binBytes` (none when 0).
+std::string glbHeader(size_t jsonBytes, size_t binBytes, const std::filesystem::path& path) {
+  uint64_t total = 12 + 8 + jsonBytes + (binBytes > 0 ? 8 + binBytes : 0);
   if (total > std::numeric_limits<uint32_t>::max())
     throw Error(path.string(), "", "cannot write .glb: more than the format's 4 GiB; lower radialSegments or "
                                    "subdivisions");
+  std::string h = "glTF";
+  appendU32(h, 2);
+  appendU32(h, total);
+  appendU32(h, jsonBytes);
+  h += "JSON";
+  return h;
+}
+
+std::string binHeader(size_t binBytes) {
+  std::string h;
+  appendU32(h, binBytes);
+  h.append("BIN\0", 4);
+  return h;
+}
+
+const uint8_t kZeros[4] = {0, 0, 0, 0};
+
+}  // namespace
+
+void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
+  tinygltf::Model gltf;
+  GlbBuilder builder(gltf);
+  std::vector<CopyJob> jobs;
+  describe(
+      model, [&](size_t o, size_t p) { return geometryOf(*model.objects[o].parts[p].mesh); }, imageSizes(model),
+      builder, gltf, &jobs);
+  // Every view is streamed from the meshes into the file, so that the geometry is never copied
+  // into a second in-memory buffer (hundreds of MB for a large plant).
+  const size_t binBytes = builder.size();
+  std::string content = glbJson(gltf, binBytes, path);
+  content.resize(align4(content.size()), ' ');  // the JSON chunk is padded with spaces
+  const std::string header = glbHeader(content.size(), binBytes, path);
 
   AtomicFileWriter out(path);
-  out.write("glTF", 4);
-  writeU32(out, 2);
-  writeU32(out, static_cast<uint32_t>(total));
-  writeU32(out, static_cast<uint32_t>(content.size()));
-  out.write("JSON", 4);
+  out.write(header);
   out.write(content);
   if (binBytes > 0) {
-    writeU32(out, static_cast<uint32_t>(binBytes));
-    out.write("BIN\0", 4);
+    out.write(binHeader(binBytes));
     std::vector<uint8_t> scratch(kScratchBytes);
-    static const uint8_t kZeros[4] = {0, 0, 0, 0};
     uint64_t at = 0;
     for (const CopyJob& job : jobs) {  // in offset order
       out.write(kZeros, job.offset - at);
@@ -282,9 +348,211 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
   out.commit();
 }
 
+namespace {
+
+// An upper bound on the JSON chunk of a scene's .glb, from what is known before meshing. Each
+// item's allowance is its JSON with every number at its longest (ten digits for a count, size
+// or index; 24 characters for a float) and every optional field present, plus its name with
+// every byte escaped (×6): a part (its primitive, four accessors, four views) 1,099 bytes, a
+// material 381, an image with its texture and sampler 194, a node with its mesh 69. Parts are
+// counted as if every one were non-empty, materials once per distinct look.
+size_t jsonAllowance(const ExportScene& scene) {
+  constexpr size_t kPart = 1100, kMaterial = 400, kImage = 200, kObject = 80, kEscape = 6;
+  size_t bytes = 1024;  // asset, scene, buffer, separators
+  std::vector<std::string> images, materials;
+  auto image = [&](const std::string& spec) {
+    if (!spec.empty() && std::find(images.begin(), images.end(), spec) == images.end()) {
+      images.push_back(spec);
+      bytes += kImage + kEscape * spec.size();
+    }
+  };
+  auto material = [&](std::string look, size_t nameLength) {
+    if (std::find(materials.begin(), materials.end(), look) == materials.end()) {
+      materials.push_back(std::move(look));
+      bytes += kMaterial + kEscape * (nameLength + 16);  // the name, made unique by a suffix
+    }
+  };
+  auto colour = [](const Vec3& c) { return fmt::format("{},{},{}", c.x(), c.y(), c.z()); };
+  // Primitive and mesh materials are named after the first mesh of their look: the longest name.
+  size_t longest = 0;
+  for (const plant::PlantModel& p : scene.plants)
+    for (const plant::PrimitiveMesh& m : p.meshes) longest = std::max(longest, m.name.size());
+  for (const NamedMesh& m : scene.meshes) longest = std::max(longest, m.name.size());
+  for (size_t i = 0; i < scene.plants.size(); ++i) {
+    const plant::PlantModel& p = scene.plants[i];
+    bytes += kObject + 2 * kEscape * std::max<size_t>(p.name.size(), 16);  // node and mesh names
+    if (p.nodeCount() > 0) {
+      bytes += kPart;
+      image(p.bark.texture);
+      material(fmt::format("bark|{}|{}|{}", p.bark.texture, colour(p.bark.color), p.bark.roughness), 4);
+    }
+    std::vector<uint8_t> used(mesh::leafShapeCount(p), 0);
+    for (uint16_t s : p.leafShape) used[s] = 1;
+    for (size_t s = 0; s < used.size(); ++s)
+      if (used[s]) {
+        const plant::LeafShape shape = mesh::leafShapeFor(p, s);
+        bytes += kPart;
+        image(shape.texture);
+        material(fmt::format("leaf|{}|{}", shape.texture, colour(shape.tint)), 5 + shape.texture.size());
+      }
+    for (const plant::PrimitiveMesh& m : p.meshes) {
+      bytes += kPart;
+      image(m.texture);
+      material(fmt::format("primitive|{}|{}", m.texture, colour(m.color)), longest);
+    }
+  }
+  for (const NamedMesh& m : scene.meshes) {
+    bytes += kObject + kPart + 2 * kEscape * std::max<size_t>(m.name.size(), 16);
+    material(fmt::format("mesh|{}", colour(m.color)), longest);
+  }
+  return align4(bytes);
+}
+
+// Writes one part's arrays at the end of the binary chunk (`at` bytes so far), each view
+// 4-byte aligned as GlbBuilder lays them out.
+void writePart(const TriangleMesh& m, AtomicFileWriter& out, uint64_t& at, std::vector<uint8_t>& scratch) {
+  auto view = [&](CopyJob::Kind kind, const void* source, size_t count, size_t bytes) {
+    out.write(kZeros, align4(at) - at);
+    at = align4(at);
+    writeJob({kind, source, count, at}, out, scratch);
+    at += bytes;
+  };
+  const size_t n = m.positions.size(), ni = m.indices.size();
+  view(CopyJob::Kind::Bytes, m.positions.data(), n * sizeof(Vec3), n * sizeof(Vec3));
+  if (!m.normals.empty()) view(CopyJob::Kind::Bytes, m.normals.data(), n * sizeof(Vec3), n * sizeof(Vec3));
+  if (!m.uvs.empty()) view(CopyJob::Kind::FlipUv, m.uvs.data(), n, n * sizeof(Vec2));
+  if (smallIndices(n))
+    view(CopyJob::Kind::Index16, m.indices.data(), ni, ni * sizeof(uint16_t));
+  else
+    view(CopyJob::Kind::Bytes, m.indices.data(), ni * sizeof(uint32_t), ni * sizeof(uint32_t));
+}
+
+// A plant's non-empty part meshes in the order assembleExportModel makes its parts: bark,
+// leaves by shape id, primitive groups.
+template <class F>
+void forPlantParts(const mesh::PlantMesh& pm, F&& f) {
+  if (!pm.bark.empty()) f(pm.bark);
+  for (const TriangleMesh& m : pm.leaves)
+    if (!m.empty()) f(m);
+  for (const mesh::PrimitiveGroup& g : pm.primitives)
+    if (!g.mesh.empty()) f(g.mesh);
+}
+
+}  // namespace
+
+// The scene's .glb in one pass with little memory: plants are meshed a few at a time (in
+// parallel, into meshes reused from plant to plant) and each one's arrays are written as soon
+// as the plants before it are. The binary chunk goes after room reserved for the JSON chunk,
+// which is written last, when every part's size and bounds are known, and padded with spaces to
+// the reserved size (a JSON chunk may end in spaces). A large scene thus never holds all its
+// meshes at once, and the memory its meshes use is touched once, not once per plant (fresh
+// pages are what made the export slow). Should the JSON outgrow its room (the allowance is
+// generous, so it should not), the scene is written again the simple way.
 void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options) {
   checkOutputPath(path);
-  writeGlb(buildExportModel(scene, options), path);
+  // Bad plants and options are reported before anything is written: the first bad plant by
+  // index, as when they were meshed in order.
+  mesh::validateMeshOptions(options.mesh, "mesh options");
+  {
+    const size_t n = scene.plants.size();
+    std::vector<std::exception_ptr> failed(n);
+    parallelFor(0, n, [&](size_t i) {
+      try {
+        mesh::checkMeshable(scene.plants[i], options.mesh);
+      } catch (...) {
+        failed[i] = std::current_exception();
+      }
+    }, 16);
+    for (const std::exception_ptr& e : failed)
+      if (e) std::rethrow_exception(e);
+  }
+  if (scene.plants.empty()) return writeGlb(buildExportModel(scene, options), path);
+
+  const size_t reserve = jsonAllowance(scene);
+  std::optional<AtomicFileWriter> out(std::in_place, path);
+  out->write(std::string(20 + reserve + 8, ' '));  // header, JSON chunk, BIN chunk header: written last
+  // Textures load while the plants are meshed and written.
+  TexturePreload textures;
+  std::vector<PlantParts> parts(scene.plants.size());
+  std::vector<PartGeometry> written;  // every plant part's, in file order
+  uint64_t at = 0;                    // bytes of the binary chunk so far
+  std::vector<uint8_t> scratch(kScratchBytes);
+  tbb::task_group loading;
+  loading.run([&] { textures = preloadTextures(scene); });
+  try {
+    const size_t tokens = size_t(std::max(2, 2 * tbb::this_task_arena::max_concurrency()));
+    std::vector<mesh::PlantMesh> slots(tokens);
+    std::vector<std::vector<PartGeometry>> slotGeometry(tokens);
+    size_t next = 0;
+    // At most `tokens` plants are in flight, and consecutive ones (the first and last stages
+    // keep plant order): plant i owns slot i % tokens.
+    auto input = [&](tbb::flow_control& fc) -> size_t {
+      if (next == scene.plants.size()) {
+        fc.stop();
+        return 0;
+      }
+      return next++;
+    };
+    auto meshPlant = [&](size_t i) {
+      mesh::PlantMesh& pm = slots[i % tokens];
+      mesh::buildPlantMesh(scene.plants[i], options.mesh, pm);
+      std::vector<PartGeometry>& g = slotGeometry[i % tokens];
+      g.clear();
+      forPlantParts(pm, [&](const TriangleMesh& m) { g.push_back(geometryOf(m)); });
+      return i;
+    };
+    auto writePlant = [&](size_t i) {
+      const mesh::PlantMesh& pm = slots[i % tokens];
+      parts[i] = plantParts(pm);
+      forPlantParts(pm, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch); });
+      written.insert(written.end(), slotGeometry[i % tokens].begin(), slotGeometry[i % tokens].end());
+    };
+    tbb::parallel_pipeline(tokens, tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order, input) &
+                                       tbb::make_filter<size_t, size_t>(tbb::filter_mode::parallel, meshPlant) &
+                                       tbb::make_filter<size_t, void>(tbb::filter_mode::serial_in_order, writePlant));
+  } catch (...) {
+    loading.wait();
+    throw;
+  }
+  loading.wait();
+
+  ExportModel model = assembleExportModel(scene, parts, textures);
+  for (size_t o = scene.plants.size(); o < model.objects.size(); ++o)
+    for (const ExportPart& part : model.objects[o].parts) writePart(*part.mesh, *out, at, scratch);
+  for (const ExportImage& img : model.images) {
+    out->write(kZeros, align4(at) - at);
+    at = align4(at);
+    out->write(img.image.bytes.data(), img.image.bytes.size());
+    at += img.image.bytes.size();
+  }
+  out->write(kZeros, align4(at) - at);
+  at = align4(at);
+
+  tinygltf::Model gltf;
+  GlbBuilder builder(gltf);
+  size_t plantPart = 0;
+  describe(
+      model,
+      [&](size_t o, size_t p) {
+        if (o < scene.plants.size()) return written[plantPart++];
+        return geometryOf(*model.objects[o].parts[p].mesh);
+      },
+      imageSizes(model), builder, gltf, nullptr);
+  const size_t binBytes = builder.size();
+  if (plantPart != written.size() || binBytes != at)
+    throw Error(path.string(), "", "cannot write .glb: the streamed parts do not match the model (internal error)");
+  std::string content = glbJson(gltf, binBytes, path);
+  if (content.size() > reserve || binBytes == 0) {
+    out.reset();  // removes the temporary
+    return writeGlb(buildExportModel(scene, options), path);
+  }
+  content.resize(reserve, ' ');
+  const std::string header = glbHeader(reserve, binBytes, path);
+  out->writeAt(0, header.data(), header.size());
+  out->writeAt(header.size(), content.data(), content.size());
+  const std::string bin = binHeader(binBytes);
+  out->writeAt(header.size() + reserve, bin.data(), bin.size());
+  out->commit();
 }
 
 }  // namespace tendril::io

@@ -10,6 +10,12 @@
 // Images are embedded as PNG/JPEG buffer views. Nothing unused is written, so the Khronos
 // validator reports no errors and no warnings. The bytes depend only on the input, not on the
 // thread count. The file is replaced atomically (atomic_file.h).
+//
+// writeGlb(scene) streams: plants are meshed a few at a time, in parallel, into meshes reused
+// from plant to plant, and written in order; the JSON chunk is written last into room reserved
+// for it before the geometry (an upper bound computed from the scene), padded with spaces. It
+// holds one plant's meshes per thread instead of the whole scene's, and its geometry and JSON
+// are those writeGlb(buildExportModel(scene)) writes; only the JSON chunk's padding differs.
 #pragma once
 
 #include "tendril/io/export_model.h"

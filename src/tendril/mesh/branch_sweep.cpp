@@ -296,15 +296,20 @@ void sweepBranches(const PlantModel& plant, const BranchChains& chains, const Me
   }
 }
 
-TriangleMesh sweepBranches(const PlantModel& plant, const MeshOptions& options) {
+void sweepBranches(const PlantModel& plant, const MeshOptions& options, TriangleMesh& mesh) {
   BranchChains chains = buildBranchChains(plant);
   SweepLayout layout = planSweep(plant, chains, options);
-  TriangleMesh mesh;
+  // resize() keeps the capacity a reused mesh already has: no new memory for a smaller plant.
   mesh.positions.resize(layout.vertexCount());
   mesh.normals.resize(layout.vertexCount());
   mesh.uvs.resize(layout.vertexCount());
   mesh.indices.resize(layout.indexCount());
   sweepBranches(plant, chains, options, layout, {mesh.positions, mesh.normals, mesh.uvs, mesh.indices, 0});
+}
+
+TriangleMesh sweepBranches(const PlantModel& plant, const MeshOptions& options) {
+  TriangleMesh mesh;
+  sweepBranches(plant, options, mesh);
   return mesh;
 }
 

@@ -76,5 +76,8 @@ void sweepBranches(const plant::PlantModel& plant, const BranchChains& chains, c
 
 // Convenience: plans, allocates and sweeps every chain of the plant into one mesh.
 TriangleMesh sweepBranches(const plant::PlantModel& plant, const MeshOptions& options);
+// The same into `mesh`, whose arrays are resized (a mesh reused from plant to plant keeps its
+// memory: the streaming .glb writer meshes hundreds of plants through a few of them).
+void sweepBranches(const plant::PlantModel& plant, const MeshOptions& options, TriangleMesh& mesh);
 
 }  // namespace tendril::mesh

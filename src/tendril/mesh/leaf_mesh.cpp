@@ -66,6 +66,12 @@ void buildLeafQuad(const PlantModel& plant, size_t leaf, float aspect, const Mes
 }
 
 std::vector<TriangleMesh> buildLeafQuads(const PlantModel& plant, const MeshOptions& options) {
+  std::vector<TriangleMesh> meshes;
+  buildLeafQuads(plant, options, meshes);
+  return meshes;
+}
+
+void buildLeafQuads(const PlantModel& plant, const MeshOptions& options, std::vector<TriangleMesh>& meshes) {
   size_t shapes = leafShapeCount(plant);
   size_t leaves = plant.leafCount();
   // Each leaf's slot within its shape's mesh, in leaf order.
@@ -76,7 +82,7 @@ std::vector<TriangleMesh> buildLeafQuads(const PlantModel& plant, const MeshOpti
   for (size_t s = 0; s < shapes; ++s) aspect[s] = leafShapeFor(plant, s).aspect;
 
   size_t nv = leafVertexCount(options), ni = leafIndexCount(options);
-  std::vector<TriangleMesh> meshes(shapes);
+  meshes.resize(shapes);
   for (size_t s = 0; s < shapes; ++s) {
     meshes[s].positions.resize(perShape[s] * nv);
     meshes[s].normals.resize(perShape[s] * nv);
@@ -90,7 +96,6 @@ std::vector<TriangleMesh> buildLeafQuads(const PlantModel& plant, const MeshOpti
     buildLeafQuad(plant, i, aspect[s], options, &m.positions[v], &m.normals[v], &m.uvs[v],
                   &m.indices[slot[i] * ni], static_cast<uint32_t>(v));
   }, 1024);
-  return meshes;
 }
 
 }  // namespace tendril::mesh

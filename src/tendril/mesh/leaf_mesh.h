@@ -43,5 +43,7 @@ void buildLeafQuad(const plant::PlantModel& plant, size_t leaf, float aspect, co
 // Every leaf, one mesh per shape id (index = shape id; leafShapeCount() meshes, some may be
 // empty), leaves in index order. Parallel, bit-identical for any thread count.
 std::vector<TriangleMesh> buildLeafQuads(const plant::PlantModel& plant, const MeshOptions& options);
+// The same into `meshes` (resized; reused meshes keep their memory).
+void buildLeafQuads(const plant::PlantModel& plant, const MeshOptions& options, std::vector<TriangleMesh>& meshes);
 
 }  // namespace tendril::mesh

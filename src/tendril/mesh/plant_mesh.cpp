@@ -16,7 +16,7 @@ size_t PlantMesh::triangleCount() const {
   return n;
 }
 
-PlantMesh buildPlantMesh(const plant::PlantModel& plant, const MeshOptions& options) {
+void checkMeshable(const plant::PlantModel& plant, const MeshOptions& options) {
   std::string source = plant.name.empty() ? std::string("plant") : plant.name;
   plant::validate(plant, source);
   for (size_t s = 0; s < plant.leafShapes.size(); ++s)
@@ -24,10 +24,18 @@ PlantMesh buildPlantMesh(const plant::PlantModel& plant, const MeshOptions& opti
       throw Error(source, fmt::format("leaf shape {}", s),
                   fmt::format("aspect (blade width / length) must be finite and > 0, got {}", plant.leafShapes[s].aspect));
   validateMeshOptions(options, "mesh options");
-  PlantMesh mesh;
-  tbb::parallel_invoke([&] { mesh.bark = sweepBranches(plant, options); },
-                       [&] { mesh.leaves = buildLeafQuads(plant, options); },
+}
+
+void buildPlantMesh(const plant::PlantModel& plant, const MeshOptions& options, PlantMesh& mesh) {
+  checkMeshable(plant, options);
+  tbb::parallel_invoke([&] { sweepBranches(plant, options, mesh.bark); },
+                       [&] { buildLeafQuads(plant, options, mesh.leaves); },
                        [&] { mesh.primitives = buildPrimitiveMeshes(plant); });
+}
+
+PlantMesh buildPlantMesh(const plant::PlantModel& plant, const MeshOptions& options) {
+  PlantMesh mesh;
+  buildPlantMesh(plant, options, mesh);
   return mesh;
 }
 

@@ -25,5 +25,11 @@ struct PlantMesh {
 // Validates the plant (Error naming it on bad data) and the options, then meshes it. Bark and
 // leaves are built in parallel; the result is bit-identical for any thread count.
 PlantMesh buildPlantMesh(const plant::PlantModel& plant, const MeshOptions& options = {});
+// The same into `mesh`, whose arrays keep the memory they have (a mesh reused from plant to
+// plant allocates only when a plant is larger than any before it).
+void buildPlantMesh(const plant::PlantModel& plant, const MeshOptions& options, PlantMesh& mesh);
+
+// The checks buildPlantMesh makes before meshing: throws the Error it would throw.
+void checkMeshable(const plant::PlantModel& plant, const MeshOptions& options);
 
 }  // namespace tendril::mesh
