@@ -860,6 +860,9 @@ void SphAir::substep(const env::Environment& env, float dt) {
     }, 1);
   }
 
+  timings_.particles += n;
+  for (size_t k = 0; k < n; ++k) timings_.airPairs += g.nbrCount[k], timings_.plantPairs += g.hitCount[k];
+
   // Pressure and viscosity (eq. 11, MCG03 eq. 10 and 14) over the listed neighbours, walls'
   // pressure.
   {

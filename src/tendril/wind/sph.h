@@ -65,10 +65,14 @@ struct SphEmitter {
   float radius = 0.25f;                // m
 };
 
-// Wall-clock seconds of the last step, per phase (for benchmarks, never for behaviour).
+// Wall-clock seconds of the last step, per phase, and how many pairs its substeps met (for
+// benchmarks, never for behaviour).
 struct SphTimings {
   double neighbours = 0, density = 0, forces = 0, coupling = 0, obstacles = 0, total = 0;
   int substeps = 0;
+  // Summed over the substeps: air particles, their air neighbours (0 < r < h) and the plant
+  // particles whose support holds them.
+  uint64_t particles = 0, airPairs = 0, plantPairs = 0;
 };
 
 // An env::AirFlow: install it with Environment::setAirFlow for the wind field's sph mode.
