@@ -87,6 +87,23 @@ inline void transpose(V4f a, V4f b, V4f c, V4f d, V4f* x, V4f* y, V4f* z, V4f* w
   *w = __builtin_shufflevector(t2, t3, 2, 3, 6, 7);
 }
 
+// A row of cells along one axis in cell units: where a point lies (c = (x − origin)/edge) and
+// the last cell. A half-width is widened by a hair — a millionth of it and of |x| + |origin|,
+// some sixteen times float round-off — so that the round-off of x − origin and of the
+// products in cell units never puts a point just inside it into a cell outside its span.
+struct RowFrame {
+  float c, widen, last, hair;
+};
+inline RowFrame rowFrame(float x, float origin, float inv, int cells) {
+  return {(x - origin) * inv, inv * (1.0f + 1e-6f), float(cells - 1), (std::abs(x) + std::abs(origin)) * 1e-6f * inv};
+}
+// See detail::rowCells. Clamped before the conversion, so truncation is the floor (and points
+// outside the row's ends fall into its outermost cells, as the grid bins them).
+inline detail::CellSpan rowSpan(const RowFrame& f, float halfWidth) {
+  const float w = halfWidth * f.widen + f.hair;
+  return {uint32_t(std::clamp(f.c - w, 0.0f, f.last)), uint32_t(std::clamp(f.c + w, 0.0f, f.last))};
+}
+
 Error settingError(const char* key, const std::string& message) { return Error("SPH settings", key, message); }
 
 void checkFinite(const char* key, float v) {
@@ -151,15 +168,18 @@ struct SphAir::Grid {
     return 0.0f;
   }
   // Calls f(begin, end) for runs holding every particle closer than r to (x, y, z): the rows of
-  // cells the sphere meets, each clipped to the cells along x the sphere meets.
+  // cells the sphere meets, each clipped to the cells along x the sphere meets. A row whose
+  // nearest point lies gap_y, gap_z away holds the sphere's points with |x' − x| < √rem,
+  // rem = r² − gap_y² − gap_z²: its run is the cells of x ± √rem, found by arithmetic (rowSpan),
+  // not by a search along the row.
   template <class F>
   void forSphereRuns(float x, float y, float z, float r, F&& f) const {
-    constexpr int kMax = 20;  // 2r ≤ 16 (1 + 1e-5) cell edges: at most 18 cells per axis
+    constexpr int kMax = 8;  // cells across are h/2 or h: 2r ≤ 4 (1 + 1e-5) edges, at most 6 cells
     const float r2 = r * r;
     int lo[3], n[3];
     float g2[3][kMax];
     const float p[3] = {x, y, z};
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 1; k < 3; ++k) {
       lo[k] = cellAxis(p[k] - r, k);
       n[k] = std::min(cellAxis(p[k] + r, k) - lo[k] + 1, kMax);
       for (int c = 0; c < n[k]; ++c) {
@@ -167,17 +187,16 @@ struct SphAir::Grid {
         g2[k][c] = d * d;
       }
     }
+    const RowFrame frame = rowFrame(x, origin.x(), inv.x(), dims.x());
     for (int cz = 0; cz < n[2]; ++cz) {
       const float rz = r2 - g2[2][cz];
       if (!(rz > 0.0f)) continue;
       for (int cy = 0; cy < n[1]; ++cy) {
         const float rem = rz - g2[1][cy];
         if (!(rem > 0.0f)) continue;
-        int x0 = 0, x1 = n[0] - 1;
-        while (x0 < x1 && !(g2[0][x0] < rem)) ++x0;
-        while (x1 > x0 && !(g2[0][x1] < rem)) --x1;
-        const uint32_t row = cellIndex(lo[0], lo[1] + cy, lo[2] + cz);
-        const uint32_t b = start[row + uint32_t(x0)], e = start[row + uint32_t(x1) + 1];
+        const detail::CellSpan span = rowSpan(frame, std::sqrt(rem));
+        const uint32_t row = cellIndex(0, lo[1] + cy, lo[2] + cz);
+        const uint32_t b = start[row + span.first], e = start[row + span.last + 1];
         if (b < e) f(b, e);
       }
     }
@@ -1099,5 +1118,13 @@ Vec3 SphAir::velocityAt(const Vec3& p, bool* covered) const {
   if (covered) *covered = z > 0.0f;
   return sum / std::max(z, 0.5f);
 }
+
+namespace detail {
+
+CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells) {
+  return rowSpan(rowFrame(x, origin, 1.0f / edge, cells), halfWidth);
+}
+
+}  // namespace detail
 
 }  // namespace tendril::wind

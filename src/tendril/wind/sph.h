@@ -175,4 +175,16 @@ class SphAir final : public env::AirFlow {
   std::unique_ptr<Walls> walls_;
 };
 
+// Building blocks of the air's neighbour search, exposed for their tests.
+namespace detail {
+
+// The cells first..last of a row of `cells` cells along one axis (cell c spans origin + c·edge
+// to origin + (c + 1)·edge; the outermost reach to infinity) that hold every point p with
+// |p − x| < halfWidth, where a point's cell is clamp(⌊(p − origin) / edge⌋) as the grid bins it.
+struct CellSpan {
+  uint32_t first = 0, last = 0;
+};
+CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells);
+}  // namespace detail
+
 }  // namespace tendril::wind
