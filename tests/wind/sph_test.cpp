@@ -358,6 +358,19 @@ TEST(SphNeighbourSearch, ARowsCellSpanHoldsEveryPointWithinItsHalfWidth) {
   EXPECT_GT(checked, 100000u);
 }
 
+TEST(SphNeighbourSearch, AppendLanesWritesTheSetLanesInOrder) {
+  for (const uint32_t base : {0u, 5u, 1u << 20, 0xfffffff0u})
+    for (unsigned mask = 0; mask < 16; ++mask) {
+      uint32_t out[4] = {7, 7, 7, 7};
+      const uint32_t n = detail::appendLanes(mask, base, out);
+      std::vector<uint32_t> expected;
+      for (uint32_t l = 0; l < 4; ++l)
+        if (mask & (1u << l)) expected.push_back(base + l);
+      ASSERT_EQ(n, expected.size()) << "mask " << mask;
+      EXPECT_EQ(std::vector<uint32_t>(out, out + n), expected) << "mask " << mask;
+    }
+}
+
 TEST(SphNeighbourSearch, VelocityAtMatchesABruteForceSum) {
   // Air streamed past a block for a few frames (irregular positions, some outside the
   // domain's cells' middle), then velocityAt at random points against the sum over every

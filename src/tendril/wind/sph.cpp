@@ -87,6 +87,42 @@ inline void transpose(V4f a, V4f b, V4f c, V4f d, V4f* x, V4f* y, V4f* z, V4f* w
   *w = __builtin_shufflevector(t2, t3, 2, 3, 6, 7);
 }
 
+// Bit l set where lane l of the mask is set.
+inline unsigned movemask(V4i m) {
+#if defined(__SSE__)
+  return unsigned(_mm_movemask_ps((__m128)m));
+#else
+  return unsigned(m[0] & 1) | unsigned(m[1] & 2) | unsigned(m[2] & 4) | unsigned(m[3] & 8);
+#endif
+}
+
+// Per 4-bit mask: the numbers of its set lanes, first to last (the rest 0), and how many.
+struct LaneTable {
+  alignas(16) int32_t lanes[16][4];
+  uint8_t count[16];
+};
+constexpr LaneTable makeLaneTable() {
+  LaneTable t{};
+  for (unsigned mask = 0; mask < 16; ++mask) {
+    int n = 0;
+    for (int l = 0; l < 4; ++l)
+      if (mask & (1u << l)) t.lanes[mask][n++] = l;
+    t.count[mask] = uint8_t(n);
+  }
+  return t;
+}
+constexpr LaneTable kLaneTable = makeLaneTable();
+
+// See detail::appendLanes: one table load, one add and one unaligned store, no branch.
+inline uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out) {
+  V4i lanes;
+  std::memcpy(&lanes, kLaneTable.lanes[mask], sizeof lanes);
+  const int32_t b = int32_t(base);
+  lanes += V4i{b, b, b, b};
+  std::memcpy(out, &lanes, sizeof lanes);
+  return kLaneTable.count[mask];
+}
+
 // A row of cells along one axis in cell units: where a point lies (c = (x − origin)/edge) and
 // the last cell. A half-width is widened by a hair — a millionth of it and of |x| + |origin|,
 // some sixteen times float round-off — so that the round-off of x − origin and of the
@@ -811,11 +847,7 @@ void SphAir::substep(const env::Environment& env, float dt) {
             const V4i inRun = kLanes < int32_t(e - j);
             const V4f t = select(inRun & (r2 < h2), 1.0f - r2 * invH2);
             sum4 += t * t * t;
-            const V4i listed = inRun & (r2 < h2) & (r2 > 0.0f);
-            out[used] = j, used -= size_t(int64_t(listed[0]));
-            out[used] = j + 1, used -= size_t(int64_t(listed[1]));
-            out[used] = j + 2, used -= size_t(int64_t(listed[2]));
-            out[used] = j + 3, used -= size_t(int64_t(listed[3]));
+            used += appendLanes(movemask(inRun & (r2 < h2) & (r2 > 0.0f)), j, out + used);
           }
         });
         g.nbrCount[k] = uint32_t(used - g.nbrBegin[k]);
@@ -1124,6 +1156,8 @@ namespace detail {
 CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells) {
   return rowSpan(rowFrame(x, origin, 1.0f / edge, cells), halfWidth);
 }
+
+uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out) { return wind::appendLanes(mask & 15u, base, out); }
 
 }  // namespace detail
 

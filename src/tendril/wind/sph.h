@@ -185,6 +185,12 @@ struct CellSpan {
   uint32_t first = 0, last = 0;
 };
 CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells);
+
+// Compress-store: writes base + l for every lane l set in the 4-bit mask, in lane order, to
+// out[0], out[1], …, and returns how many. Always writes four entries: the ones past the count
+// are scratch, so out needs room for four.
+uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out);
+
 }  // namespace detail
 
 }  // namespace tendril::wind
