@@ -358,7 +358,7 @@ TEST(SphNeighbourSearch, ARowsCellSpanHoldsEveryPointWithinItsHalfWidth) {
   EXPECT_GT(checked, 100000u);
 }
 
-TEST(SphNeighbourSearch, AppendLanesWritesTheSetLanesInOrder) {
+TEST(SphNeighbourSearch, AppendLanesAndAppendPickedWriteTheSetLanesInOrder) {
   for (const uint32_t base : {0u, 5u, 1u << 20, 0xfffffff0u})
     for (unsigned mask = 0; mask < 16; ++mask) {
       uint32_t out[4] = {7, 7, 7, 7};
@@ -369,6 +369,16 @@ TEST(SphNeighbourSearch, AppendLanesWritesTheSetLanesInOrder) {
       ASSERT_EQ(n, expected.size()) << "mask " << mask;
       EXPECT_EQ(std::vector<uint32_t>(out, out + n), expected) << "mask " << mask;
     }
+  const uint32_t values[4] = {40, 3, 17, 99};
+  for (unsigned mask = 0; mask < 16; ++mask) {
+    uint32_t out[4] = {7, 7, 7, 7};
+    const uint32_t n = detail::appendPicked(mask, values, out);
+    std::vector<uint32_t> expected;
+    for (uint32_t l = 0; l < 4; ++l)
+      if (mask & (1u << l)) expected.push_back(values[l]);
+    ASSERT_EQ(n, expected.size()) << "mask " << mask;
+    EXPECT_EQ(std::vector<uint32_t>(out, out + n), expected) << "mask " << mask;
+  }
 }
 
 TEST(SphNeighbourSearch, VelocityAtMatchesABruteForceSum) {

@@ -123,6 +123,14 @@ inline uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out) {
   return kLaneTable.count[mask];
 }
 
+// See detail::appendPicked: the same with the values of the set lanes (four scalar copies
+// through the table, no branch).
+inline uint32_t appendPicked(unsigned mask, const uint32_t* values, uint32_t* out) {
+  const int32_t* lanes = kLaneTable.lanes[mask];
+  out[0] = values[lanes[0]], out[1] = values[lanes[1]], out[2] = values[lanes[2]], out[3] = values[lanes[3]];
+  return kLaneTable.count[mask];
+}
+
 // A row of cells along one axis in cell units: where a point lies (c = (x − origin)/edge) and
 // the last cell. A half-width is widened by a hair — a millionth of it and of |x| + |origin|,
 // some sixteen times float round-off — so that the round-off of x − origin and of the
@@ -254,14 +262,16 @@ struct SphAir::Plants {
   std::vector<float> dragK;         // k = ½ ρ C_d A |u⊥| (kg/s), fixed over a frame
   std::vector<float> invZ;          // 1 / max(Σ V W, ½), fixed over a frame
   std::vector<Vec3> extent;         // half-extents of the support's bounding box
-  // The same packed for 4-wide gathers: (x, 1/α²), (axis, 1/β²), (v, k/max(Z, ½)), (det G, Ψ, 0, 0).
-  std::vector<V4f> packX, packAxis, packV, packG;
+  // The same packed for 4-wide gathers: (x, 1/α²), (axis, 1/β²), (v, det G k/max(Z, ½)), and
+  // Ψ det G (the factors always met together, folded).
+  std::vector<V4f> packX, packAxis, packV;
+  std::vector<float> psiG;
   // Bins over the domain (cubic cells; the outermost reach to infinity).
   Vec3 origin = Vec3::Zero();
   float edge = 1.0f, inv = 1.0f;
   Eigen::Vector3i dims = Eigen::Vector3i::Ones();
   std::vector<uint32_t> start;      // per bin + 1
-  std::vector<uint32_t> entries;    // plant indices per bin
+  std::vector<uint32_t> entries;    // plant indices per bin, and four 0s (for 4-wide reads past the last)
 
   uint32_t binOf(const Vec3& p) const {
     int c[3];
@@ -274,7 +284,7 @@ struct SphAir::Plants {
   void clear() {
     slot.clear(), x.clear(), axis.clear(), v.clear(), invA2.clear(), invB2.clear(), detG.clear();
     volume.clear(), dragK.clear(), invZ.clear(), extent.clear(), start.clear(), entries.clear();
-    packX.clear(), packAxis.clear(), packV.clear(), packG.clear();
+    packX.clear(), packAxis.clear(), packV.clear(), psiG.clear();
   }
   // η² = |G(x − x_j)|² for the ellipsoid of j (eq. 13), with u = x − x_j.
   float eta2(uint32_t j, const Vec3& u, float* along) const {
@@ -722,7 +732,7 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
   for (size_t c = 1; c < first.size(); ++c) first[c] += first[c - 1];
   P.slot.resize(n), P.x.resize(n), P.axis.resize(n), P.v.resize(n), P.invA2.resize(n), P.invB2.resize(n);
   P.detG.resize(n), P.volume.resize(n), P.dragK.assign(n, 0.0f), P.invZ.assign(n, 0.0f), P.extent.resize(n);
-  P.packX.resize(n), P.packAxis.resize(n), P.packG.resize(n), P.packV.resize(n);
+  P.packX.resize(n), P.packAxis.resize(n), P.psiG.resize(n), P.packV.resize(n);
   for (size_t k = 0; k < n; ++k) {
     const uint32_t j = first[cellOf[k]]++;
     const uint32_t i = found[k];
@@ -740,7 +750,7 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
     P.volume[j] = 4.0f / 3.0f * kPi * a * b * b;
     P.packX[j] = V4f{P.x[j].x(), P.x[j].y(), P.x[j].z(), P.invA2[j]};
     P.packAxis[j] = V4f{P.axis[j].x(), P.axis[j].y(), P.axis[j].z(), P.invB2[j]};
-    P.packG[j] = V4f{P.detG[j], P.volume[j], 0.0f, 0.0f};
+    P.psiG[j] = P.volume[j] * P.detG[j];
     // The support ellipsoid's bounding box.
     for (int c = 0; c < 3; ++c) {
       const float e2 = P.axis[j][c] * P.axis[j][c];
@@ -762,7 +772,7 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
   };
   for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { ++P.start[size_t(c) + 1]; });
   for (size_t c = 1; c < P.start.size(); ++c) P.start[c] += P.start[c - 1];
-  P.entries.resize(P.start.back());
+  P.entries.assign(P.start.back() + 4, 0u);
   std::vector<uint32_t> next(P.start.begin(), P.start.end() - 1);
   for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { P.entries[next[size_t(c)]++] = j; });
 }
@@ -803,7 +813,7 @@ void SphAir::plantSide(particles::ParticleWorld& world) {
     rel -= rel.dot(P.axis[j]) * P.axis[j];
     const float area = 4.0f * world.halfLength(i) * world.radius(i);
     P.dragK[j] = 0.5f * rho0 * std::min(z, 1.0f) * cd * area * rel.norm();
-    P.packV[j] = V4f{P.v[j].x(), P.v[j].y(), P.v[j].z(), P.dragK[j] * P.invZ[j]};
+    P.packV[j] = V4f{P.v[j].x(), P.v[j].y(), P.v[j].z(), P.detG[j] * P.dragK[j] * P.invZ[j]};
     const float mj = world.mass(i);
     // Implicit in the drag, so a light particle never overshoots the air's velocity.
     external[i] = P.dragK[j] * rel / (mj + P.dragK[j] * dt) + pressureForce / mj;
@@ -885,26 +895,23 @@ void SphAir::substep(const env::Environment& env, float dt) {
           const uint32_t bin = P.binOf(x), b = P.start[bin], e = P.start[bin + 1];
           uint32_t* out = room(buffer, used, e - b + 4);
           // Four candidates at a time (their packed state transposed into lanes; lanes past the
-          // list repeat its last entry and are masked off), four partial sums.
+          // list read the next bin's entries or the padding and are masked off), four partial
+          // sums; the hits compress-stored.
           const V4f x4 = splat(x.x()), y4 = splat(x.y()), z4 = splat(x.z());
           V4f sum4 = splat(0.0f);
           for (uint32_t q = b; q < e; q += 4) {
-            uint32_t j[4];
-            for (int l = 0; l < 4; ++l) j[l] = P.entries[std::min(q + uint32_t(l), e - 1)];
-            V4f jx, jy, jz, invA2, ex, ey, ez, invB2, detG, volume, unused0, unused1;
+            const uint32_t* j = &P.entries[q];
+            V4f jx, jy, jz, invA2, ex, ey, ez, invB2;
             transpose(P.packX[j[0]], P.packX[j[1]], P.packX[j[2]], P.packX[j[3]], &jx, &jy, &jz, &invA2);
             transpose(P.packAxis[j[0]], P.packAxis[j[1]], P.packAxis[j[2]], P.packAxis[j[3]], &ex, &ey, &ez, &invB2);
-            transpose(P.packG[j[0]], P.packG[j[1]], P.packG[j[2]], P.packG[j[3]], &detG, &volume, &unused0, &unused1);
+            const V4f psiG = {P.psiG[j[0]], P.psiG[j[1]], P.psiG[j[2]], P.psiG[j[3]]};
             const V4f ux = x4 - jx, uy = y4 - jy, uz = z4 - jz;
             const V4f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
             const V4f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
             const V4i hit = (kLanes < int32_t(e - q)) & (e2 < 1.0f);
             const V4f t = 1.0f - e2;
-            sum4 += masked(hit, (rho0 * kPoly6) * volume * detG * t * t * t);
-            out[used] = j[0], used -= size_t(int64_t(hit[0]));
-            out[used] = j[1], used -= size_t(int64_t(hit[1]));
-            out[used] = j[2], used -= size_t(int64_t(hit[2]));
-            out[used] = j[3], used -= size_t(int64_t(hit[3]));
+            sum4 += masked(hit, (rho0 * kPoly6) * psiG * t * t * t);
+            used += appendPicked(movemask(hit), j, out + used);
           }
           rho += (sum4[0] + sum4[1]) + (sum4[2] + sum4[3]);
           g.rho[k] = rho;
@@ -987,24 +994,24 @@ void SphAir::substep(const env::Environment& env, float dt) {
         for (uint32_t c = 0; c < count; c += 4) {
           uint32_t j[4];
           for (int l = 0; l < 4; ++l) j[l] = list[std::min(c + uint32_t(l), count - 1)];
-          V4f jx, jy, jz, invA2, ex, ey, ez, invB2, jvx, jvy, jvz, dragShare, detG, psi, unused0, unused1;
+          V4f jx, jy, jz, invA2, ex, ey, ez, invB2, jvx, jvy, jvz, dragShareG;
           transpose(P.packX[j[0]], P.packX[j[1]], P.packX[j[2]], P.packX[j[3]], &jx, &jy, &jz, &invA2);
           transpose(P.packAxis[j[0]], P.packAxis[j[1]], P.packAxis[j[2]], P.packAxis[j[3]], &ex, &ey, &ez, &invB2);
-          transpose(P.packV[j[0]], P.packV[j[1]], P.packV[j[2]], P.packV[j[3]], &jvx, &jvy, &jvz, &dragShare);
-          transpose(P.packG[j[0]], P.packG[j[1]], P.packG[j[2]], P.packG[j[3]], &detG, &psi, &unused0, &unused1);
+          transpose(P.packV[j[0]], P.packV[j[1]], P.packV[j[2]], P.packV[j[3]], &jvx, &jvy, &jvz, &dragShareG);
+          const V4f psiG = {P.psiG[j[0]], P.psiG[j[1]], P.psiG[j[2]], P.psiG[j[3]]};
           const V4i live = kLanes < int32_t(count - c);
           const V4f ux = x4 - jx, uy = y4 - jy, uz = z4 - jz;
           const V4f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
           const V4f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
           const V4f eta = sqrt4(e2), t = 1.0f - eta;
-          const V4f coef = masked(live & (eta > 1e-6f), push * psi * detG * t * t / eta);
+          const V4f coef = masked(live & (eta > 1e-6f), push * psiG * t * t / eta);
           const V4f ga = along * invA2 - along * invB2;  // G²u = ga e + u/β²
           ax += coef * (ga * ex + invB2 * ux);
           ay += coef * (ga * ey + invB2 * uy);
           az += coef * (ga * ez + invB2 * uz);
           // The air's share φ = V W / max(Z, ½) of the plant particle's drag k (v_j − v)⊥.
           const V4f w = 1.0f - e2;
-          const V4f kk = masked(live, (volume * kPoly6) * detG * w * w * w * dragShare);
+          const V4f kk = masked(live, (volume * kPoly6) * w * w * w * dragShareG);
           V4f rx = jvx - vx4, ry = jvy - vy4, rz = jvz - vz4;
           const V4f ra = rx * ex + ry * ey + rz * ez;
           rx -= ra * ex, ry -= ra * ey, rz -= ra * ez;
@@ -1167,6 +1174,10 @@ CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells)
 }
 
 uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out) { return wind::appendLanes(mask & 15u, base, out); }
+
+uint32_t appendPicked(unsigned mask, const uint32_t* values, uint32_t* out) {
+  return wind::appendPicked(mask & 15u, values, out);
+}
 
 }  // namespace detail
 
