@@ -758,23 +758,31 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
     }
   }
   // Bin: each plant particle into every cell its box meets (boxes clamped to the grid, whose
-  // outermost cells reach to infinity).
-  P.start.assign(cells + 1, 0);
-  auto forCells = [&](uint32_t j, auto&& f) {
-    int c0[3], c1[3];
+  // outermost cells reach to infinity). In parallel over the layers of cells along z, each
+  // layer's cells counted and filled by one task in plant order, so every cell's list is the
+  // same for any thread count.
+  std::vector<Eigen::Vector3i> c0(n), c1(n);
+  parallelFor(0, n, [&](size_t j) {
     for (int k = 0; k < 3; ++k) {
-      c0[k] = std::clamp(int(std::floor((P.x[j][k] - P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
-      c1[k] = std::clamp(int(std::floor((P.x[j][k] + P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
+      c0[j][k] = std::clamp(int(std::floor((P.x[j][k] - P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
+      c1[j][k] = std::clamp(int(std::floor((P.x[j][k] + P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
     }
-    for (int z = c0[2]; z <= c1[2]; ++z)
-      for (int y = c0[1]; y <= c1[1]; ++y)
-        for (int x = c0[0], c = int(P.binIndex(x, y, z)); x <= c1[0]; ++x, ++c) f(c);
+  }, 1024);
+  auto forLayer = [&](int z, auto&& f) {
+    for (uint32_t j = 0; j < n; ++j) {
+      if (z < c0[j].z() || z > c1[j].z()) continue;
+      for (int y = c0[j].y(); y <= c1[j].y(); ++y)
+        for (int x = c0[j].x(), c = int(P.binIndex(x, y, z)); x <= c1[j].x(); ++x, ++c) f(c, j);
+    }
   };
-  for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { ++P.start[size_t(c) + 1]; });
+  P.start.assign(cells + 1, 0);
+  parallelFor(0, size_t(P.dims.z()), [&](size_t z) { forLayer(int(z), [&](int c, uint32_t) { ++P.start[size_t(c) + 1]; }); }, 1);
   for (size_t c = 1; c < P.start.size(); ++c) P.start[c] += P.start[c - 1];
   P.entries.assign(P.start.back() + 4, 0u);
   std::vector<uint32_t> next(P.start.begin(), P.start.end() - 1);
-  for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { P.entries[next[size_t(c)]++] = j; });
+  parallelFor(0, size_t(P.dims.z()), [&](size_t z) {
+    forLayer(int(z), [&](int c, uint32_t j) { P.entries[next[size_t(c)]++] = j; });
+  }, 1);
 }
 
 // Once per frame, per plant particle: the air velocity around it (eq. 12 with its kernel), its
