@@ -762,14 +762,22 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
   // layer's cells counted and filled by one task in plant order, so every cell's list is the
   // same for any thread count.
   std::vector<Eigen::Vector3i> c0(n), c1(n);
+  std::vector<int> centreLayer(n);
   parallelFor(0, n, [&](size_t j) {
     for (int k = 0; k < 3; ++k) {
       c0[j][k] = std::clamp(int(std::floor((P.x[j][k] - P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
       c1[j][k] = std::clamp(int(std::floor((P.x[j][k] + P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
     }
+    centreLayer[j] = int(P.binOf(P.x[j]) / (uint32_t(P.dims.x()) * uint32_t(P.dims.y())));
   }, 1024);
+  // The plants are in the order of their centres' bins (z-major): those whose box can meet a
+  // layer have their centre within `reach` layers of it, a contiguous range.
+  int reach = 0;
+  for (uint32_t j = 0; j < n; ++j) reach = std::max({reach, centreLayer[j] - c0[j].z(), c1[j].z() - centreLayer[j]});
   auto forLayer = [&](int z, auto&& f) {
-    for (uint32_t j = 0; j < n; ++j) {
+    const uint32_t first = uint32_t(std::lower_bound(centreLayer.begin(), centreLayer.end(), z - reach) - centreLayer.begin());
+    const uint32_t end = uint32_t(std::upper_bound(centreLayer.begin(), centreLayer.end(), z + reach) - centreLayer.begin());
+    for (uint32_t j = first; j < end; ++j) {
       if (z < c0[j].z() || z > c1[j].z()) continue;
       for (int y = c0[j].y(); y <= c1[j].y(); ++y)
         for (int x = c0[j].x(), c = int(P.binIndex(x, y, z)); x <= c1[j].x(); ++x, ++c) f(c, j);
