@@ -155,6 +155,7 @@ void BM_SphStep(benchmark::State& state) {
   Scene& s = scene(size_t(state.range(0)), size_t(state.range(1)));
   std::vector<double> total, neighbours, density, forces, coupling, obstacles, plantStep, cpu;
   int substeps = 0;
+  double particleSubsteps = 0, airPairs = 0, plantPairs = 0;
   size_t minAir = s.air->count(), minCoupled = s.air->coupledPlantParticles();
   CALLGRIND_START_INSTRUMENTATION;
   for (auto _ : state) {
@@ -174,6 +175,7 @@ void BM_SphStep(benchmark::State& state) {
     coupling.push_back(t.coupling);
     obstacles.push_back(t.obstacles);
     substeps = std::max(substeps, t.substeps);
+    particleSubsteps += double(t.particles), airPairs += double(t.airPairs), plantPairs += double(t.plantPairs);
     Timer plant;
     s.world->step(*s.env);
     plantStep.push_back(plant.seconds());
@@ -193,6 +195,9 @@ void BM_SphStep(benchmark::State& state) {
   state.counters["plant_particles"] = double(s.world->particleCount());
   state.counters["spacing_mm"] = 1e3 * s.air->settings().spacing;
   state.counters["substeps"] = substeps;
+  // Mean air neighbours and plant particles met per air particle and substep.
+  state.counters["air_pairs"] = airPairs / std::max(particleSubsteps, 1.0);
+  state.counters["plant_pairs"] = plantPairs / std::max(particleSubsteps, 1.0);
   state.counters["median_ms"] = medianMs(total);
   state.counters["neighbours_ms"] = medianMs(neighbours);
   state.counters["density_ms"] = medianMs(density);

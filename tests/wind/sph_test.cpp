@@ -1,7 +1,7 @@
 // SPH air coupled both ways with particle plants (seed 000 §5.3): still air keeps its rest
 // density and stays out of obstacles, a stream never passes through a wall, a plant in a stream
-// bends downwind and slows the air behind it, results do not depend on the thread count, and
-// bad settings are refused.
+// bends downwind and slows the air behind it, results do not depend on the thread count, the
+// neighbour search finds what a brute-force search finds, and bad settings are refused.
 #include "support/test_paths.h"
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
@@ -15,7 +15,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
+#include <random>
 
 namespace tendril::wind {
 namespace {
@@ -299,6 +301,127 @@ TEST(SphCoupling, ResultsAreTheSameForAnyThreadCount) {
   setThreadCount(0);
   EXPECT_EQ(one, two);
   EXPECT_NE(one, other);
+}
+
+TEST(SphNeighbourSearch, ARowsCellSpanHoldsEveryPointWithinItsHalfWidth) {
+  // Against a brute-force reference: points across x ± w — its ends nudged one float inward,
+  // points on and beside the cell boundaries in reach, random ones — binned as the grid bins
+  // them, on rows far from the origin too (where round-off is largest).
+  std::mt19937 rng(7);
+  auto uniform = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); };
+  const float inf = std::numeric_limits<float>::infinity();
+  size_t checked = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const float origin = uniform(-200.0f, 200.0f), edge = std::exp(uniform(std::log(1e-3f), 0.0f));
+    const int cells = 1 + int(rng() % 300);
+    const float inv = 1.0f / edge;
+    const float x = origin + uniform(-0.2f, 1.2f) * edge * float(cells), w = uniform(0.0f, 10.0f) * edge;
+    const detail::CellSpan span = detail::rowCells(x, w, origin, edge, cells);
+    auto cellOf = [&](float p) { return std::clamp(int(std::floor((p - origin) * inv)), 0, cells - 1); };
+    auto check = [&](float p) {
+      if (!(std::abs(p - x) < w)) return;
+      ++checked;
+      const int c = cellOf(p);
+      ASSERT_TRUE(c >= int(span.first) && c <= int(span.last))
+          << "point " << p << " in cell " << c << " outside " << span.first << ".." << span.last << " for x " << x
+          << " ± " << w << ", origin " << origin << ", edge " << edge;
+    };
+    check(std::nextafter(x - w, x));
+    check(std::nextafter(x + w, x));
+    for (int c = cellOf(x - w); c <= cellOf(x + w) + 1; ++c) {
+      const float boundary = origin + float(c) * edge;
+      check(boundary);
+      check(std::nextafter(boundary, -inf));
+      check(std::nextafter(boundary, inf));
+    }
+    for (int k = 0; k < 4; ++k) check(x + uniform(-w, w));
+    // No wider than the cells x ± w meets and one more at either end.
+    EXPECT_LE(int(span.last) - int(span.first), int(std::ceil(2.0f * w * inv)) + 2);
+    if (HasFatalFailure()) return;
+  }
+  // The hardest case: a point on (or a float beside) a cell boundary, the half-width a float
+  // more than its distance from x.
+  for (int trial = 0; trial < 200000; ++trial) {
+    const float origin = uniform(-200.0f, 200.0f), edge = std::exp(uniform(std::log(1e-3f), 0.0f));
+    const int cells = 2 + int(rng() % 300);
+    const float inv = 1.0f / edge;
+    const float boundary = origin + float(1 + int(rng() % uint32_t(cells - 1))) * edge;
+    const float p = std::nextafter(boundary, float(int(rng() % 3) - 1) * inf);
+    const float x = p + (rng() % 2 ? 1.0f : -1.0f) * uniform(0.0f, 10.0f) * edge;
+    const float w = std::nextafter(std::abs(p - x), inf);
+    const detail::CellSpan span = detail::rowCells(x, w, origin, edge, cells);
+    const int c = std::clamp(int(std::floor((p - origin) * inv)), 0, cells - 1);
+    ASSERT_TRUE(c >= int(span.first) && c <= int(span.last))
+        << "point " << p << " in cell " << c << " outside " << span.first << ".." << span.last << " for x " << x
+        << " ± " << w << ", origin " << origin << ", edge " << edge;
+  }
+  EXPECT_GT(checked, 100000u);
+}
+
+TEST(SphNeighbourSearch, AppendLanesAndAppendPickedWriteTheSetLanesInOrder) {
+  for (const uint32_t base : {0u, 5u, 1u << 20, 0xfffffff0u})
+    for (unsigned mask = 0; mask < 16; ++mask) {
+      uint32_t out[4] = {7, 7, 7, 7};
+      const uint32_t n = detail::appendLanes(mask, base, out);
+      std::vector<uint32_t> expected;
+      for (uint32_t l = 0; l < 4; ++l)
+        if (mask & (1u << l)) expected.push_back(base + l);
+      ASSERT_EQ(n, expected.size()) << "mask " << mask;
+      EXPECT_EQ(std::vector<uint32_t>(out, out + n), expected) << "mask " << mask;
+    }
+  const uint32_t values[4] = {40, 3, 17, 99};
+  for (unsigned mask = 0; mask < 16; ++mask) {
+    uint32_t out[4] = {7, 7, 7, 7};
+    const uint32_t n = detail::appendPicked(mask, values, out);
+    std::vector<uint32_t> expected;
+    for (uint32_t l = 0; l < 4; ++l)
+      if (mask & (1u << l)) expected.push_back(values[l]);
+    ASSERT_EQ(n, expected.size()) << "mask " << mask;
+    EXPECT_EQ(std::vector<uint32_t>(out, out + n), expected) << "mask " << mask;
+  }
+}
+
+TEST(SphNeighbourSearch, VelocityAtMatchesABruteForceSum) {
+  // Air streamed past a block for a few frames (irregular positions, some outside the
+  // domain's cells' middle), then velocityAt at random points against the sum over every
+  // particle: a run that misses a cell of neighbours shows as a wrong velocity.
+  auto env = std::make_unique<env::Environment>();
+  addBox(*env, "block", Vec3(0.2f, 0.3f, 0.2f), Vec3(0.1f, 0.15f, 0.0f));
+  env->commit();
+  SphSettings s;
+  s.spacing = 0.04f;
+  s.domainMin = Vec3(-0.4f, 0.0f, -0.3f);
+  s.domainMax = Vec3(0.5f, 0.5f, 0.3f);
+  SphAir air(s);
+  air.fillBox(s.domainMin, s.domainMax, *env, Vec3(1.5f, 0.2f, -0.3f));
+  SphEmitter e;
+  e.position = Vec3(-0.38f, 0.25f, 0.0f);
+  e.speed = 1.5f;
+  e.radius = 0.3f;
+  air.addEmitter(e);
+  for (int frame = 0; frame < 6; ++frame) air.step(*env, nullptr);
+  const float h = air.supportRadius(), norm6 = 315.0f / (64.0f * kPi * h * h * h);
+  std::mt19937 rng(11);
+  auto uniform = [&](float a, float b) { return std::uniform_real_distribution<float>(a, b)(rng); };
+  int covered = 0;
+  for (int sample = 0; sample < 400; ++sample) {
+    const Vec3 p(uniform(s.domainMin.x(), s.domainMax.x()), uniform(s.domainMin.y(), s.domainMax.y()),
+                 uniform(s.domainMin.z(), s.domainMax.z()));
+    double z = 0.0;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (size_t j = 0; j < air.count(); ++j) {
+      const float q = (air.positions()[j] - p).squaredNorm() / (h * h);
+      if (!(q < 1.0f)) continue;
+      const double w = air.particleMass() / air.densities()[j] * norm6 * std::pow(1.0 - q, 3.0);
+      z += w;
+      sum += w * air.velocities()[j].cast<double>();
+    }
+    const Eigen::Vector3d expected = sum / std::max(z, 0.5);
+    const Vec3 found = air.velocityAt(p);
+    covered += z > 0.0;
+    EXPECT_LT((found.cast<double>() - expected).norm(), 1e-4 * (1.0 + expected.norm())) << "at " << p.transpose();
+  }
+  EXPECT_GT(covered, 300);
 }
 
 TEST(SphAir, BadSettingsAreRefused) {

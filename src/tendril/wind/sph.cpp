@@ -87,6 +87,67 @@ inline void transpose(V4f a, V4f b, V4f c, V4f d, V4f* x, V4f* y, V4f* z, V4f* w
   *w = __builtin_shufflevector(t2, t3, 2, 3, 6, 7);
 }
 
+// Bit l set where lane l of the mask is set.
+inline unsigned movemask(V4i m) {
+#if defined(__SSE__)
+  return unsigned(_mm_movemask_ps((__m128)m));
+#else
+  return unsigned(m[0] & 1) | unsigned(m[1] & 2) | unsigned(m[2] & 4) | unsigned(m[3] & 8);
+#endif
+}
+
+// Per 4-bit mask: the numbers of its set lanes, first to last (the rest 0), and how many.
+struct LaneTable {
+  alignas(16) int32_t lanes[16][4];
+  uint8_t count[16];
+};
+constexpr LaneTable makeLaneTable() {
+  LaneTable t{};
+  for (unsigned mask = 0; mask < 16; ++mask) {
+    int n = 0;
+    for (int l = 0; l < 4; ++l)
+      if (mask & (1u << l)) t.lanes[mask][n++] = l;
+    t.count[mask] = uint8_t(n);
+  }
+  return t;
+}
+constexpr LaneTable kLaneTable = makeLaneTable();
+
+// See detail::appendLanes: one table load, one add and one unaligned store, no branch.
+inline uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out) {
+  V4i lanes;
+  std::memcpy(&lanes, kLaneTable.lanes[mask], sizeof lanes);
+  const int32_t b = int32_t(base);
+  lanes += V4i{b, b, b, b};
+  std::memcpy(out, &lanes, sizeof lanes);
+  return kLaneTable.count[mask];
+}
+
+// See detail::appendPicked: the same with the values of the set lanes (four scalar copies
+// through the table, no branch).
+inline uint32_t appendPicked(unsigned mask, const uint32_t* values, uint32_t* out) {
+  const int32_t* lanes = kLaneTable.lanes[mask];
+  out[0] = values[lanes[0]], out[1] = values[lanes[1]], out[2] = values[lanes[2]], out[3] = values[lanes[3]];
+  return kLaneTable.count[mask];
+}
+
+// A row of cells along one axis in cell units: where a point lies (c = (x − origin)/edge) and
+// the last cell. A half-width is widened by a hair — a millionth of it and of |x| + |origin|,
+// some sixteen times float round-off — so that the round-off of x − origin and of the
+// products in cell units never puts a point just inside it into a cell outside its span.
+struct RowFrame {
+  float c, widen, last, hair;
+};
+inline RowFrame rowFrame(float x, float origin, float inv, int cells) {
+  return {(x - origin) * inv, inv * (1.0f + 1e-6f), float(cells - 1), (std::abs(x) + std::abs(origin)) * 1e-6f * inv};
+}
+// See detail::rowCells. Clamped before the conversion, so truncation is the floor (and points
+// outside the row's ends fall into its outermost cells, as the grid bins them).
+inline detail::CellSpan rowSpan(const RowFrame& f, float halfWidth) {
+  const float w = halfWidth * f.widen + f.hair;
+  return {uint32_t(std::clamp(f.c - w, 0.0f, f.last)), uint32_t(std::clamp(f.c + w, 0.0f, f.last))};
+}
+
 Error settingError(const char* key, const std::string& message) { return Error("SPH settings", key, message); }
 
 void checkFinite(const char* key, float v) {
@@ -100,10 +161,11 @@ void checkRange(const char* key, float v, float lo, float hi, const char* unit) 
 
 }  // namespace
 
-// A uniform grid over the domain, cells of h/8 along x and h/2 across (h/2 or h when that
-// would be too many cells), rebuilt by counting sort after every substep, and the particles' state copied into grid
-// order (structure of arrays), so that a particle's neighbours lie in contiguous runs (one per
-// row of x-adjacent cells), each run clipped to the sphere of radius h around it.
+// A uniform grid over the domain, cells of h/8 along x and h across (h/4 or h/2 along x, or
+// cubes of h, when that would be too many cells), rebuilt by counting sort after every
+// substep, and the particles' state copied into grid order (structure of arrays), so that a
+// particle's neighbours lie in contiguous runs (one per row of x-adjacent cells), each run
+// clipped to the sphere of radius h around it.
 struct SphAir::Grid {
   Vec3 origin = Vec3::Zero();
   Vec3 edge = Vec3::Ones(), inv = Vec3::Ones();  // cell edges, their inverses
@@ -151,15 +213,18 @@ struct SphAir::Grid {
     return 0.0f;
   }
   // Calls f(begin, end) for runs holding every particle closer than r to (x, y, z): the rows of
-  // cells the sphere meets, each clipped to the cells along x the sphere meets.
+  // cells the sphere meets, each clipped to the cells along x the sphere meets. A row whose
+  // nearest point lies gap_y, gap_z away holds the sphere's points with |x' − x| < √rem,
+  // rem = r² − gap_y² − gap_z²: its run is the cells of x ± √rem, found by arithmetic (rowSpan),
+  // not by a search along the row.
   template <class F>
   void forSphereRuns(float x, float y, float z, float r, F&& f) const {
-    constexpr int kMax = 20;  // 2r ≤ 16 (1 + 1e-5) cell edges: at most 18 cells per axis
+    constexpr int kMax = 8;  // cells across are h: 2r ≤ 2 (1 + 1e-5) edges, at most 4 cells
     const float r2 = r * r;
     int lo[3], n[3];
     float g2[3][kMax];
     const float p[3] = {x, y, z};
-    for (int k = 0; k < 3; ++k) {
+    for (int k = 1; k < 3; ++k) {
       lo[k] = cellAxis(p[k] - r, k);
       n[k] = std::min(cellAxis(p[k] + r, k) - lo[k] + 1, kMax);
       for (int c = 0; c < n[k]; ++c) {
@@ -167,17 +232,16 @@ struct SphAir::Grid {
         g2[k][c] = d * d;
       }
     }
+    const RowFrame frame = rowFrame(x, origin.x(), inv.x(), dims.x());
     for (int cz = 0; cz < n[2]; ++cz) {
       const float rz = r2 - g2[2][cz];
       if (!(rz > 0.0f)) continue;
       for (int cy = 0; cy < n[1]; ++cy) {
         const float rem = rz - g2[1][cy];
         if (!(rem > 0.0f)) continue;
-        int x0 = 0, x1 = n[0] - 1;
-        while (x0 < x1 && !(g2[0][x0] < rem)) ++x0;
-        while (x1 > x0 && !(g2[0][x1] < rem)) --x1;
-        const uint32_t row = cellIndex(lo[0], lo[1] + cy, lo[2] + cz);
-        const uint32_t b = start[row + uint32_t(x0)], e = start[row + uint32_t(x1) + 1];
+        const detail::CellSpan span = rowSpan(frame, std::sqrt(rem));
+        const uint32_t row = cellIndex(0, lo[1] + cy, lo[2] + cz);
+        const uint32_t b = start[row + span.first], e = start[row + span.last + 1];
         if (b < e) f(b, e);
       }
     }
@@ -198,14 +262,16 @@ struct SphAir::Plants {
   std::vector<float> dragK;         // k = ½ ρ C_d A |u⊥| (kg/s), fixed over a frame
   std::vector<float> invZ;          // 1 / max(Σ V W, ½), fixed over a frame
   std::vector<Vec3> extent;         // half-extents of the support's bounding box
-  // The same packed for 4-wide gathers: (x, 1/α²), (axis, 1/β²), (v, k/max(Z, ½)), (det G, Ψ, 0, 0).
-  std::vector<V4f> packX, packAxis, packV, packG;
+  // The same packed for 4-wide gathers: (x, 1/α²), (axis, 1/β²), (v, det G k/max(Z, ½)), and
+  // Ψ det G (the factors always met together, folded).
+  std::vector<V4f> packX, packAxis, packV;
+  std::vector<float> psiG;
   // Bins over the domain (cubic cells; the outermost reach to infinity).
   Vec3 origin = Vec3::Zero();
   float edge = 1.0f, inv = 1.0f;
   Eigen::Vector3i dims = Eigen::Vector3i::Ones();
   std::vector<uint32_t> start;      // per bin + 1
-  std::vector<uint32_t> entries;    // plant indices per bin
+  std::vector<uint32_t> entries;    // plant indices per bin, and four 0s (for 4-wide reads past the last)
 
   uint32_t binOf(const Vec3& p) const {
     int c[3];
@@ -218,7 +284,7 @@ struct SphAir::Plants {
   void clear() {
     slot.clear(), x.clear(), axis.clear(), v.clear(), invA2.clear(), invB2.clear(), detG.clear();
     volume.clear(), dragK.clear(), invZ.clear(), extent.clear(), start.clear(), entries.clear();
-    packX.clear(), packAxis.clear(), packV.clear(), packG.clear();
+    packX.clear(), packAxis.clear(), packV.clear(), psiG.clear();
   }
   // η² = |G(x − x_j)|² for the ellipsoid of j (eq. 13), with u = x − x_j.
   float eta2(uint32_t j, const Vec3& u, float* along) const {
@@ -378,9 +444,13 @@ SphAir::SphAir(const SphSettings& settings) : settings_(settings) {
       w.edgeGradient[size_t(t1) * Walls::kEdgeSamples + t2] = float(mass_ * grad);
     }
 
-  // The grid over the domain: cells of h/8 along x and h/2 across, whose runs clipped to the
-  // sphere of radius h hold about 2.2 candidates per neighbour (27 cells of edge h: 6.4); or
-  // cells of h/2, or h, where that would be too many cells.
+  // The grid over the domain: cells of h/8 along x and h across. A particle's candidates are
+  // then about 8 runs (3 × 3 rows, the corners clipped) holding 3.2 candidates per neighbour;
+  // cells of h/8 × h/2 × h/2 hold 2.0 per neighbour but in 22 runs, and the cost of a run
+  // (its clipping, its loop's set-up and exit) outweighs the candidates saved (callgrind: 30%
+  // fewer instructions in the density pass, a third less time). The 27 cells of edge h would
+  // hold 6.4 per neighbour. Cells of h/4 or h/2 along x, or cubes of h, where the finer ones
+  // would be too many.
   Grid& g = *grid_;
   g.origin = settings_.domainMin;
   auto cellsOf = [&](const Vec3& edge, Eigen::Vector3i* dims) {
@@ -397,7 +467,8 @@ SphAir::SphAir(const SphSettings& settings) : settings_(settings) {
                                              "shrink the domain or raise the spacing",
                                              cells, h_, kMaxCells));
   g.edge = Vec3::Constant(h_);
-  for (const Vec3& edge : {Vec3(0.125f * h_, 0.5f * h_, 0.5f * h_), Vec3(0.5f * h_, 0.5f * h_, 0.5f * h_)}) {
+  for (const float along : {0.125f, 0.25f, 0.5f}) {
+    const Vec3 edge(along * h_, h_, h_);
     Eigen::Vector3i dims;
     if (const size_t n = cellsOf(edge, &dims); n <= kMaxCells) {
       g.edge = edge, g.dims = dims, cells = n;
@@ -606,8 +677,9 @@ void SphAir::buildGrid() {
       if (g.cellOf[i] != kDead) g.order[next[g.cellOf[i]]++] = uint32_t(i);
   }
   for (auto* a : {&g.vx, &g.vy, &g.vz, &g.rho, &g.pressure, &g.sdf, &g.dragRate}) a->resize(live);
-  // Positions padded by four for the density pass's 4-wide loads (the padding is masked off).
-  for (auto* a : {&g.px, &g.py, &g.pz}) a->assign(live + 4, 0.0f);
+  // Positions padded by eight for the density pass's 4-wide loads, two per loop trip (the
+  // padding is masked off).
+  for (auto* a : {&g.px, &g.py, &g.pz}) a->assign(live + 8, 0.0f);
   g.sdfNormal.resize(live), g.acc.resize(live), g.dragAcc.resize(live);
   const float c2 = settings_.soundSpeed * settings_.soundSpeed, rho0 = settings_.restDensity;
   const float background = backgroundPressure();
@@ -660,7 +732,7 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
   for (size_t c = 1; c < first.size(); ++c) first[c] += first[c - 1];
   P.slot.resize(n), P.x.resize(n), P.axis.resize(n), P.v.resize(n), P.invA2.resize(n), P.invB2.resize(n);
   P.detG.resize(n), P.volume.resize(n), P.dragK.assign(n, 0.0f), P.invZ.assign(n, 0.0f), P.extent.resize(n);
-  P.packX.resize(n), P.packAxis.resize(n), P.packG.resize(n), P.packV.resize(n);
+  P.packX.resize(n), P.packAxis.resize(n), P.psiG.resize(n), P.packV.resize(n);
   for (size_t k = 0; k < n; ++k) {
     const uint32_t j = first[cellOf[k]]++;
     const uint32_t i = found[k];
@@ -678,7 +750,7 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
     P.volume[j] = 4.0f / 3.0f * kPi * a * b * b;
     P.packX[j] = V4f{P.x[j].x(), P.x[j].y(), P.x[j].z(), P.invA2[j]};
     P.packAxis[j] = V4f{P.axis[j].x(), P.axis[j].y(), P.axis[j].z(), P.invB2[j]};
-    P.packG[j] = V4f{P.detG[j], P.volume[j], 0.0f, 0.0f};
+    P.psiG[j] = P.volume[j] * P.detG[j];
     // The support ellipsoid's bounding box.
     for (int c = 0; c < 3; ++c) {
       const float e2 = P.axis[j][c] * P.axis[j][c];
@@ -686,23 +758,39 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
     }
   }
   // Bin: each plant particle into every cell its box meets (boxes clamped to the grid, whose
-  // outermost cells reach to infinity).
-  P.start.assign(cells + 1, 0);
-  auto forCells = [&](uint32_t j, auto&& f) {
-    int c0[3], c1[3];
+  // outermost cells reach to infinity). In parallel over the layers of cells along z, each
+  // layer's cells counted and filled by one task in plant order, so every cell's list is the
+  // same for any thread count.
+  std::vector<Eigen::Vector3i> c0(n), c1(n);
+  std::vector<int> centreLayer(n);
+  parallelFor(0, n, [&](size_t j) {
     for (int k = 0; k < 3; ++k) {
-      c0[k] = std::clamp(int(std::floor((P.x[j][k] - P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
-      c1[k] = std::clamp(int(std::floor((P.x[j][k] + P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
+      c0[j][k] = std::clamp(int(std::floor((P.x[j][k] - P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
+      c1[j][k] = std::clamp(int(std::floor((P.x[j][k] + P.extent[j][k] - P.origin[k]) * P.inv)), 0, P.dims[k] - 1);
     }
-    for (int z = c0[2]; z <= c1[2]; ++z)
-      for (int y = c0[1]; y <= c1[1]; ++y)
-        for (int x = c0[0], c = int(P.binIndex(x, y, z)); x <= c1[0]; ++x, ++c) f(c);
+    centreLayer[j] = int(P.binOf(P.x[j]) / (uint32_t(P.dims.x()) * uint32_t(P.dims.y())));
+  }, 1024);
+  // The plants are in the order of their centres' bins (z-major): those whose box can meet a
+  // layer have their centre within `reach` layers of it, a contiguous range.
+  int reach = 0;
+  for (uint32_t j = 0; j < n; ++j) reach = std::max({reach, centreLayer[j] - c0[j].z(), c1[j].z() - centreLayer[j]});
+  auto forLayer = [&](int z, auto&& f) {
+    const auto from = std::lower_bound(centreLayer.begin(), centreLayer.end(), z - reach);
+    const auto to = std::upper_bound(from, centreLayer.end(), z + reach);
+    for (uint32_t j = uint32_t(from - centreLayer.begin()); j < uint32_t(to - centreLayer.begin()); ++j) {
+      if (z < c0[j].z() || z > c1[j].z()) continue;
+      for (int y = c0[j].y(); y <= c1[j].y(); ++y)
+        for (int x = c0[j].x(), c = int(P.binIndex(x, y, z)); x <= c1[j].x(); ++x, ++c) f(c, j);
+    }
   };
-  for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { ++P.start[size_t(c) + 1]; });
+  P.start.assign(cells + 1, 0);
+  parallelFor(0, size_t(P.dims.z()), [&](size_t z) { forLayer(int(z), [&](int c, uint32_t) { ++P.start[size_t(c) + 1]; }); }, 1);
   for (size_t c = 1; c < P.start.size(); ++c) P.start[c] += P.start[c - 1];
-  P.entries.resize(P.start.back());
+  P.entries.assign(P.start.back() + 4, 0u);
   std::vector<uint32_t> next(P.start.begin(), P.start.end() - 1);
-  for (uint32_t j = 0; j < n; ++j) forCells(j, [&](int c) { P.entries[next[size_t(c)]++] = j; });
+  parallelFor(0, size_t(P.dims.z()), [&](size_t z) {
+    forLayer(int(z), [&](int c, uint32_t j) { P.entries[next[size_t(c)]++] = j; });
+  }, 1);
 }
 
 // Once per frame, per plant particle: the air velocity around it (eq. 12 with its kernel), its
@@ -741,7 +829,7 @@ void SphAir::plantSide(particles::ParticleWorld& world) {
     rel -= rel.dot(P.axis[j]) * P.axis[j];
     const float area = 4.0f * world.halfLength(i) * world.radius(i);
     P.dragK[j] = 0.5f * rho0 * std::min(z, 1.0f) * cd * area * rel.norm();
-    P.packV[j] = V4f{P.v[j].x(), P.v[j].y(), P.v[j].z(), P.dragK[j] * P.invZ[j]};
+    P.packV[j] = V4f{P.v[j].x(), P.v[j].y(), P.v[j].z(), P.detG[j] * P.dragK[j] * P.invZ[j]};
     const float mj = world.mass(i);
     // Implicit in the drag, so a light particle never overshoots the air's velocity.
     external[i] = P.dragK[j] * rel / (mj + P.dragK[j] * dt) + pressureForce / mj;
@@ -781,23 +869,21 @@ void SphAir::substep(const env::Environment& env, float dt) {
         const float x = g.px[k], y = g.py[k], z = g.pz[k];
         g.nbrBegin[k] = uint32_t(used);
         // Four candidates at a time (the arrays are padded), lanes past the run masked off;
-        // four partial sums, added in a fixed order.
+        // four partial sums, added in a fixed order. Eight per loop trip: a run holds about
+        // eight candidates, and a loop exit fewer to mispredict saved 7% of the pass's time.
         const V4f x4 = splat(x), y4 = splat(y), z4 = splat(z);
         V4f sum4 = splat(0.0f);
         g.forSphereRuns(x, y, z, search, [&](uint32_t b, uint32_t e) {
           uint32_t* out = room(buffer, used, e - b + 4);
-          for (uint32_t j = b; j < e; j += 4) {
+          auto four = [&](uint32_t j) {
             const V4f dx = load4(&g.px[j]) - x4, dy = load4(&g.py[j]) - y4, dz = load4(&g.pz[j]) - z4;
             const V4f r2 = dx * dx + dy * dy + dz * dz;
-            const V4i inRun = kLanes < int32_t(e - j);
+            const V4i inRun = kLanes < int32_t(e) - int32_t(j);
             const V4f t = select(inRun & (r2 < h2), 1.0f - r2 * invH2);
             sum4 += t * t * t;
-            const V4i listed = inRun & (r2 < h2) & (r2 > 0.0f);
-            out[used] = j, used -= size_t(int64_t(listed[0]));
-            out[used] = j + 1, used -= size_t(int64_t(listed[1]));
-            out[used] = j + 2, used -= size_t(int64_t(listed[2]));
-            out[used] = j + 3, used -= size_t(int64_t(listed[3]));
-          }
+            used += appendLanes(movemask(inRun & (r2 < h2) & (r2 > 0.0f)), j, out + used);
+          };
+          for (uint32_t j = b; j < e; j += 8) four(j), four(j + 4);
         });
         g.nbrCount[k] = uint32_t(used - g.nbrBegin[k]);
         const float sum = (sum4[0] + sum4[1]) + (sum4[2] + sum4[3]);
@@ -825,26 +911,23 @@ void SphAir::substep(const env::Environment& env, float dt) {
           const uint32_t bin = P.binOf(x), b = P.start[bin], e = P.start[bin + 1];
           uint32_t* out = room(buffer, used, e - b + 4);
           // Four candidates at a time (their packed state transposed into lanes; lanes past the
-          // list repeat its last entry and are masked off), four partial sums.
+          // list read the next bin's entries or the padding and are masked off), four partial
+          // sums; the hits compress-stored.
           const V4f x4 = splat(x.x()), y4 = splat(x.y()), z4 = splat(x.z());
           V4f sum4 = splat(0.0f);
           for (uint32_t q = b; q < e; q += 4) {
-            uint32_t j[4];
-            for (int l = 0; l < 4; ++l) j[l] = P.entries[std::min(q + uint32_t(l), e - 1)];
-            V4f jx, jy, jz, invA2, ex, ey, ez, invB2, detG, volume, unused0, unused1;
+            const uint32_t* j = &P.entries[q];
+            V4f jx, jy, jz, invA2, ex, ey, ez, invB2;
             transpose(P.packX[j[0]], P.packX[j[1]], P.packX[j[2]], P.packX[j[3]], &jx, &jy, &jz, &invA2);
             transpose(P.packAxis[j[0]], P.packAxis[j[1]], P.packAxis[j[2]], P.packAxis[j[3]], &ex, &ey, &ez, &invB2);
-            transpose(P.packG[j[0]], P.packG[j[1]], P.packG[j[2]], P.packG[j[3]], &detG, &volume, &unused0, &unused1);
+            const V4f psiG = {P.psiG[j[0]], P.psiG[j[1]], P.psiG[j[2]], P.psiG[j[3]]};
             const V4f ux = x4 - jx, uy = y4 - jy, uz = z4 - jz;
             const V4f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
             const V4f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
             const V4i hit = (kLanes < int32_t(e - q)) & (e2 < 1.0f);
             const V4f t = 1.0f - e2;
-            sum4 += masked(hit, (rho0 * kPoly6) * volume * detG * t * t * t);
-            out[used] = j[0], used -= size_t(int64_t(hit[0]));
-            out[used] = j[1], used -= size_t(int64_t(hit[1]));
-            out[used] = j[2], used -= size_t(int64_t(hit[2]));
-            out[used] = j[3], used -= size_t(int64_t(hit[3]));
+            sum4 += masked(hit, (rho0 * kPoly6) * psiG * t * t * t);
+            used += appendPicked(movemask(hit), j, out + used);
           }
           rho += (sum4[0] + sum4[1]) + (sum4[2] + sum4[3]);
           g.rho[k] = rho;
@@ -859,6 +942,9 @@ void SphAir::substep(const env::Environment& env, float dt) {
       }
     }, 1);
   }
+
+  timings_.particles += n;
+  for (size_t k = 0; k < n; ++k) timings_.airPairs += g.nbrCount[k], timings_.plantPairs += g.hitCount[k];
 
   // Pressure and viscosity (eq. 11, MCG03 eq. 10 and 14) over the listed neighbours, walls'
   // pressure.
@@ -924,24 +1010,24 @@ void SphAir::substep(const env::Environment& env, float dt) {
         for (uint32_t c = 0; c < count; c += 4) {
           uint32_t j[4];
           for (int l = 0; l < 4; ++l) j[l] = list[std::min(c + uint32_t(l), count - 1)];
-          V4f jx, jy, jz, invA2, ex, ey, ez, invB2, jvx, jvy, jvz, dragShare, detG, psi, unused0, unused1;
+          V4f jx, jy, jz, invA2, ex, ey, ez, invB2, jvx, jvy, jvz, dragShareG;
           transpose(P.packX[j[0]], P.packX[j[1]], P.packX[j[2]], P.packX[j[3]], &jx, &jy, &jz, &invA2);
           transpose(P.packAxis[j[0]], P.packAxis[j[1]], P.packAxis[j[2]], P.packAxis[j[3]], &ex, &ey, &ez, &invB2);
-          transpose(P.packV[j[0]], P.packV[j[1]], P.packV[j[2]], P.packV[j[3]], &jvx, &jvy, &jvz, &dragShare);
-          transpose(P.packG[j[0]], P.packG[j[1]], P.packG[j[2]], P.packG[j[3]], &detG, &psi, &unused0, &unused1);
+          transpose(P.packV[j[0]], P.packV[j[1]], P.packV[j[2]], P.packV[j[3]], &jvx, &jvy, &jvz, &dragShareG);
+          const V4f psiG = {P.psiG[j[0]], P.psiG[j[1]], P.psiG[j[2]], P.psiG[j[3]]};
           const V4i live = kLanes < int32_t(count - c);
           const V4f ux = x4 - jx, uy = y4 - jy, uz = z4 - jz;
           const V4f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
           const V4f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
           const V4f eta = sqrt4(e2), t = 1.0f - eta;
-          const V4f coef = masked(live & (eta > 1e-6f), push * psi * detG * t * t / eta);
+          const V4f coef = masked(live & (eta > 1e-6f), push * psiG * t * t / eta);
           const V4f ga = along * invA2 - along * invB2;  // G²u = ga e + u/β²
           ax += coef * (ga * ex + invB2 * ux);
           ay += coef * (ga * ey + invB2 * uy);
           az += coef * (ga * ez + invB2 * uz);
           // The air's share φ = V W / max(Z, ½) of the plant particle's drag k (v_j − v)⊥.
           const V4f w = 1.0f - e2;
-          const V4f kk = masked(live, (volume * kPoly6) * detG * w * w * w * dragShare);
+          const V4f kk = masked(live, (volume * kPoly6) * w * w * w * dragShareG);
           V4f rx = jvx - vx4, ry = jvy - vy4, rz = jvz - vz4;
           const V4f ra = rx * ex + ry * ey + rz * ez;
           rx -= ra * ex, ry -= ra * ey, rz -= ra * ez;
@@ -1096,5 +1182,19 @@ Vec3 SphAir::velocityAt(const Vec3& p, bool* covered) const {
   if (covered) *covered = z > 0.0f;
   return sum / std::max(z, 0.5f);
 }
+
+namespace detail {
+
+CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells) {
+  return rowSpan(rowFrame(x, origin, 1.0f / edge, cells), halfWidth);
+}
+
+uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out) { return wind::appendLanes(mask & 15u, base, out); }
+
+uint32_t appendPicked(unsigned mask, const uint32_t* values, uint32_t* out) {
+  return wind::appendPicked(mask & 15u, values, out);
+}
+
+}  // namespace detail
 
 }  // namespace tendril::wind

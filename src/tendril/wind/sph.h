@@ -65,10 +65,14 @@ struct SphEmitter {
   float radius = 0.25f;                // m
 };
 
-// Wall-clock seconds of the last step, per phase (for benchmarks, never for behaviour).
+// Wall-clock seconds of the last step, per phase, and how many pairs its substeps met (for
+// benchmarks, never for behaviour).
 struct SphTimings {
   double neighbours = 0, density = 0, forces = 0, coupling = 0, obstacles = 0, total = 0;
   int substeps = 0;
+  // Summed over the substeps: air particles, their air neighbours (0 < r < h) and the plant
+  // particles whose support holds them.
+  uint64_t particles = 0, airPairs = 0, plantPairs = 0;
 };
 
 // An env::AirFlow: install it with Environment::setAirFlow for the wind field's sph mode.
@@ -170,5 +174,25 @@ class SphAir final : public env::AirFlow {
   std::unique_ptr<Plants> plants_;
   std::unique_ptr<Walls> walls_;
 };
+
+// Building blocks of the air's neighbour search, exposed for their tests.
+namespace detail {
+
+// The cells first..last of a row of `cells` cells along one axis (cell c spans origin + c·edge
+// to origin + (c + 1)·edge; the outermost reach to infinity) that hold every point p with
+// |p − x| < halfWidth, where a point's cell is clamp(⌊(p − origin) / edge⌋) as the grid bins it.
+struct CellSpan {
+  uint32_t first = 0, last = 0;
+};
+CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells);
+
+// Compress-store: writes base + l for every lane l set in the 4-bit mask, in lane order, to
+// out[0], out[1], …, and returns how many. Always writes four entries: the ones past the count
+// are scratch, so out needs room for four.
+uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out);
+// The same with values[l] for the set lanes l (values holds four).
+uint32_t appendPicked(unsigned mask, const uint32_t* values, uint32_t* out);
+
+}  // namespace detail
 
 }  // namespace tendril::wind
