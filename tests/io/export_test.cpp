@@ -244,7 +244,10 @@ GlbChunks readGlb(const fs::path& path) {
 TEST(IoGlb, StreamedFileMatchesTheWholeModelsFile) {
   fs::path dir = meshtest::exportTestDir();
   ExportScene scene = testScene();
-  scene.plants.push_back(meshtest::syntheticIvy(3000));  // 32-bit indices
+  // A large plant first (32-bit indices), so that the smaller plants after it are meshed into
+  // the meshes it grew; more plants than the writer has meshes in flight.
+  scene.plants.insert(scene.plants.begin(), meshtest::syntheticIvy(3000));
+  for (int k = 0; k < 12; ++k) scene.plants.push_back(meshtest::syntheticIvy(40 + 30 * k));
   PlantModel second = meshtest::syntheticIvy(200);
   second.name = std::string(300, '"');  // a name every byte of which is escaped
   scene.plants.push_back(second);
