@@ -27,6 +27,7 @@
 #endif
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -87,6 +88,56 @@ inline void transpose(V4f a, V4f b, V4f c, V4f d, V4f* x, V4f* y, V4f* z, V4f* w
   *w = __builtin_shufflevector(t2, t3, 2, 3, 6, 7);
 }
 
+// The substep's passes are also compiled for AVX2 and chosen at run time (GCC and Clang on
+// x86-64, unless the whole build already targets AVX2).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__AVX2__)
+#define TENDRIL_SPH_AVX2 1
+#else
+#define TENDRIL_SPH_AVX2 0
+#endif
+// The eight-lane helpers are inlined into both versions; GCC's note that passing them by value
+// would differ between the two ABIs does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+// Eight floats or ints: one AVX register where the target has AVX, two SSE registers
+// otherwise (the same operations in the same order, so the same results either way).
+using V8f = float __attribute__((vector_size(32)));
+using V8i = int32_t __attribute__((vector_size(32)));
+constexpr V8i kLanes8 = {0, 1, 2, 3, 4, 5, 6, 7};
+inline V8f splat8(float v) { return V8f{v, v, v, v, v, v, v, v}; }
+inline V8f join(V4f lo, V4f hi) { return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7); }
+inline V4f lowHalf(V8f v) { return __builtin_shufflevector(v, v, 0, 1, 2, 3); }
+inline V4f highHalf(V8f v) { return __builtin_shufflevector(v, v, 4, 5, 6, 7); }
+inline V4i lowHalf(V8i v) { return __builtin_shufflevector(v, v, 0, 1, 2, 3); }
+inline V4i highHalf(V8i v) { return __builtin_shufflevector(v, v, 4, 5, 6, 7); }
+inline V8f masked8(V8i mask, V8f v) { return (V8f)(mask & (V8i)v); }
+inline V8f load8(const float* p) {
+  V8f v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+// Rows base[j[0]], …, base[j[7]] (four floats each) to four columns of eight: column c, lane l
+// = base[j[l]][c]. Rows l and l + 4 share a 128-bit half, so the transpose stays within halves
+// (AVX's in-lane unpacks and shuffles).
+inline void transpose8(const V4f* base, const uint32_t* j, V8f* x, V8f* y, V8f* z, V8f* w) {
+  const V8f a = join(base[j[0]], base[j[4]]), b = join(base[j[1]], base[j[5]]);
+  const V8f c = join(base[j[2]], base[j[6]]), d = join(base[j[3]], base[j[7]]);
+  const V8f t0 = __builtin_shufflevector(a, b, 0, 8, 1, 9, 4, 12, 5, 13);
+  const V8f t1 = __builtin_shufflevector(c, d, 0, 8, 1, 9, 4, 12, 5, 13);
+  const V8f t2 = __builtin_shufflevector(a, b, 2, 10, 3, 11, 6, 14, 7, 15);
+  const V8f t3 = __builtin_shufflevector(c, d, 2, 10, 3, 11, 6, 14, 7, 15);
+  *x = __builtin_shufflevector(t0, t1, 0, 1, 8, 9, 4, 5, 12, 13);
+  *y = __builtin_shufflevector(t0, t1, 2, 3, 10, 11, 6, 7, 14, 15);
+  *z = __builtin_shufflevector(t2, t3, 0, 1, 8, 9, 4, 5, 12, 13);
+  *w = __builtin_shufflevector(t2, t3, 2, 3, 10, 11, 6, 7, 14, 15);
+}
+inline V8f sqrt8(V8f v) { return join(sqrt4(lowHalf(v)), sqrt4(highHalf(v))); }
+// The sum of the eight lanes in a fixed order.
+inline float total8(V8f v) {
+  const V4f s = lowHalf(v) + highHalf(v);
+  return (s[0] + s[1]) + (s[2] + s[3]);
+}
+
 // Bit l set where lane l of the mask is set.
 inline unsigned movemask(V4i m) {
 #if defined(__SSE__)
@@ -95,6 +146,8 @@ inline unsigned movemask(V4i m) {
   return unsigned(m[0] & 1) | unsigned(m[1] & 2) | unsigned(m[2] & 4) | unsigned(m[3] & 8);
 #endif
 }
+
+inline unsigned movemask8(V8i m) { return movemask(lowHalf(m)) | (movemask(highHalf(m)) << 4); }
 
 // Per 4-bit mask: the numbers of its set lanes, first to last (the rest 0), and how many.
 struct LaneTable {
@@ -120,14 +173,6 @@ inline uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out) {
   const int32_t b = int32_t(base);
   lanes += V4i{b, b, b, b};
   std::memcpy(out, &lanes, sizeof lanes);
-  return kLaneTable.count[mask];
-}
-
-// See detail::appendPicked: the same with the values of the set lanes (four scalar copies
-// through the table, no branch).
-inline uint32_t appendPicked(unsigned mask, const uint32_t* values, uint32_t* out) {
-  const int32_t* lanes = kLaneTable.lanes[mask];
-  out[0] = values[lanes[0]], out[1] = values[lanes[1]], out[2] = values[lanes[2]], out[3] = values[lanes[3]];
   return kLaneTable.count[mask];
 }
 
@@ -180,14 +225,14 @@ struct SphAir::Grid {
   std::vector<V4f> packedX, packedV;
   std::vector<Vec3> sdfNormal;
   // Grid-ordered results of a substep.
-  std::vector<Vec3> acc, dragAcc;
+  std::vector<Vec3> acc, plantAcc, dragAcc;  // all forces; the plants' pressure push; their drag
   std::vector<float> dragRate;  // Σ φ k / m (1/s): the implicit factor of the drag
   // Per substep, gathered in the density pass and reused by the forces: the air neighbours
-  // (0 < r < h, grid order) and the plant particles whose support holds the particle. Stored
-  // per block of kBlock particles (a fixed split of the grid order, whatever the thread count),
-  // each particle's entries contiguous in its block's buffer.
-  std::vector<std::vector<uint32_t>> nbrBlocks, hitBlocks;
-  std::vector<uint32_t> nbrBegin, nbrCount, hitBegin, hitCount;
+  // (0 < r < h, grid order), stored per block of kBlock particles (a fixed split of the grid
+  // order, whatever the thread count), each particle's entries contiguous in its block's
+  // buffer. And how many plant particles' supports hold the particle (for the benchmark).
+  std::vector<std::vector<uint32_t>> nbrBlocks;
+  std::vector<uint32_t> nbrBegin, nbrCount, hitCount;
 
   size_t size() const { return order.size(); }
   int cellAxis(float v, int k) const { return std::clamp(int(std::floor((v - origin[k]) * inv[k])), 0, dims[k] - 1); }
@@ -271,7 +316,7 @@ struct SphAir::Plants {
   float edge = 1.0f, inv = 1.0f;
   Eigen::Vector3i dims = Eigen::Vector3i::Ones();
   std::vector<uint32_t> start;      // per bin + 1
-  std::vector<uint32_t> entries;    // plant indices per bin, and four 0s (for 4-wide reads past the last)
+  std::vector<uint32_t> entries;    // plant indices per bin, and eight 0s (for 8-wide reads past the last)
 
   uint32_t binOf(const Vec3& p) const {
     int c[3];
@@ -676,10 +721,9 @@ void SphAir::buildGrid() {
     for (size_t i = 0; i < n; ++i)
       if (g.cellOf[i] != kDead) g.order[next[g.cellOf[i]]++] = uint32_t(i);
   }
-  for (auto* a : {&g.vx, &g.vy, &g.vz, &g.rho, &g.pressure, &g.sdf, &g.dragRate}) a->resize(live);
-  // Positions padded by eight for the density pass's 4-wide loads, two per loop trip (the
-  // padding is masked off).
-  for (auto* a : {&g.px, &g.py, &g.pz}) a->assign(live + 8, 0.0f);
+  for (auto* a : {&g.sdf, &g.dragRate}) a->resize(live);
+  // Padded by eight for 8-wide loads (the padding is masked off).
+  for (auto* a : {&g.px, &g.py, &g.pz, &g.vx, &g.vy, &g.vz, &g.rho, &g.pressure}) a->assign(live + 8, 0.0f);
   g.sdfNormal.resize(live), g.acc.resize(live), g.dragAcc.resize(live);
   const float c2 = settings_.soundSpeed * settings_.soundSpeed, rho0 = settings_.restDensity;
   const float background = backgroundPressure();
@@ -786,12 +830,284 @@ void SphAir::collectPlants(const particles::ParticleWorld& world) {
   P.start.assign(cells + 1, 0);
   parallelFor(0, size_t(P.dims.z()), [&](size_t z) { forLayer(int(z), [&](int c, uint32_t) { ++P.start[size_t(c) + 1]; }); }, 1);
   for (size_t c = 1; c < P.start.size(); ++c) P.start[c] += P.start[c - 1];
-  P.entries.assign(P.start.back() + 4, 0u);
+  P.entries.assign(P.start.back() + 8, 0u);
   std::vector<uint32_t> next(P.start.begin(), P.start.end() - 1);
   parallelFor(0, size_t(P.dims.z()), [&](size_t z) {
     forLayer(int(z), [&](int c, uint32_t j) { P.entries[next[size_t(c)]++] = j; });
   }, 1);
 }
+
+namespace {
+
+// What a substep's passes share.
+struct PassConstants {
+  size_t n = 0;
+  float h = 0, h2 = 0, invH2 = 0, m = 0, rho0 = 0, c2 = 0, background = 0, norm6 = 0, search = 0;
+  float kp = 0, kv = 0;  // the pressure and viscosity forces' folded constants
+  bool closed = false, hasPlants = false;
+  Vec3 dmin = Vec3::Zero(), dmax = Vec3::Zero();
+};
+
+// Room for `more` entries after `used` in a block's buffer.
+inline uint32_t* room(std::vector<uint32_t>& buffer, size_t used, size_t more) {
+  if (buffer.size() < used + more) buffer.resize(std::max(used + more, 2 * buffer.size()));
+  return buffer.data();
+}
+
+// Density (eq. 12 with A = ρ: ρ_i = Σ m W_poly6) plus the walls' mirrored lattices, for the
+// particles of one block; the same pass lists the neighbours 0 < r < h for the forces.
+template <class Grid, class Walls>
+[[gnu::always_inline]] inline void densityBlock(Grid& g, const Walls& W, const PassConstants& c, size_t block) {
+  std::vector<uint32_t>& buffer = g.nbrBlocks[block];
+  size_t used = 0;
+  const float h2 = c.h2, invH2 = c.invH2;
+  for (size_t k = block * kBlock, end = std::min(c.n, k + kBlock); k < end; ++k) {
+    const float x = g.px[k], y = g.py[k], z = g.pz[k];
+    g.nbrBegin[k] = uint32_t(used);
+    // Eight candidates at a time (the arrays are padded), lanes past the run masked off; eight
+    // partial sums, added in a fixed order. A run holds about eight candidates.
+    const V8f x8 = splat8(x), y8 = splat8(y), z8 = splat8(z);
+    V8f sum8 = splat8(0.0f);
+    g.forSphereRuns(x, y, z, c.search, [&](uint32_t b, uint32_t e) {
+      uint32_t* out = room(buffer, used, e - b + 8);
+      for (uint32_t j = b; j < e; j += 8) {
+        const V8f dx = load8(&g.px[j]) - x8, dy = load8(&g.py[j]) - y8, dz = load8(&g.pz[j]) - z8;
+        const V8f r2 = dx * dx + dy * dy + dz * dz;
+        const V8i near = (kLanes8 < int32_t(e) - int32_t(j)) & (r2 < h2);
+        const V8f t = masked8(near, 1.0f - r2 * invH2);
+        sum8 += t * t * t;
+        const unsigned mask = movemask8(near & (r2 > 0.0f));
+        used += appendLanes(mask & 15u, j, out + used);
+        used += appendLanes(mask >> 4, j + 4, out + used);
+      }
+    });
+    g.nbrCount[k] = uint32_t(used - g.nbrBegin[k]);
+    float rho = c.m * c.norm6 * total8(sum8);
+    rho += W.lookup(W.density, g.sdf[k]);
+    if (c.closed) rho += boxGhostDensity(W, Vec3(x, y, z) - c.dmin, c.dmax - Vec3(x, y, z));  // walls
+    g.rho[k] = rho;
+  }
+}
+
+// Plants add to the density like boundary particles of volume Ψ (eq. 12–13), push the air by
+// pressure and drag it; then the equation of state. One pass over each air particle's bin: the
+// plants do not move within a frame, so every plant term is a sum over the supports holding
+// the particle of factors that depend only on the pair, times the particle's own ρ, p or v:
+//   ρ      += ρ0 Σ Ψ W_j
+//   a_push  = −(p/ρ) Σ Ψ ∇W_spiky,j,  ∇W = det G (−45/π)(1 − |η|)² G²u/|η|,
+//             G²u = (u·e) e/α² + (u − (u·e) e)/β²   (mirrored pressure on a boundary particle)
+//   a_drag  = (1/m) Σ φ k (v_j − v)⊥,  φ = V W_j / max(Z, ½), V = m/ρ   (the air's share of the
+//             plant particle's drag; Σ φ k / m is the implicit factor)
+// so the sums are gathered first and scaled once ρ and p are known.
+template <class Grid, class Plants>
+[[gnu::always_inline]] inline void plantBlock(Grid& g, const Plants& P, const PassConstants& c, size_t block) {
+  const float rho0 = c.rho0, c2 = c.c2, background = c.background;
+  const V4f* packX = P.packX.data();
+  const V4f* packAxis = P.packAxis.data();
+  const V4f* packV = P.packV.data();
+  for (size_t k = block * kBlock, end = std::min(c.n, k + kBlock); k < end; ++k) {
+    float rho = g.rho[k];
+    uint32_t hits = 0;
+    if (c.hasPlants) {
+      const Vec3 x(g.px[k], g.py[k], g.pz[k]);
+      const uint32_t bin = P.binOf(x), b = P.start[bin], e = P.start[bin + 1];
+      // Eight candidates at a time (their packed state transposed into lanes; lanes past the
+      // list read the next bin's entries or the padding and are masked off), sums in eight
+      // lanes; the pressure and drag terms only for trips holding a hit.
+      const V8f x8 = splat8(x.x()), y8 = splat8(x.y()), z8 = splat8(x.z());
+      const V8f vx8 = splat8(g.vx[k]), vy8 = splat8(g.vy[k]), vz8 = splat8(g.vz[k]);
+      V8f sum8 = splat8(0.0f), sx = sum8, sy = sum8, sz = sum8, dx = sum8, dy = sum8, dz = sum8, rate8 = sum8;
+      for (uint32_t q = b; q < e; q += 8) {
+        const uint32_t* j = &P.entries[q];
+        V8f jx, jy, jz, invA2, ex, ey, ez, invB2;
+        transpose8(packX, j, &jx, &jy, &jz, &invA2);
+        transpose8(packAxis, j, &ex, &ey, &ez, &invB2);
+        const V8f ux = x8 - jx, uy = y8 - jy, uz = z8 - jz;
+        const V8f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
+        const V8f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
+        const V8i hit = (kLanes8 < int32_t(e - q)) & (e2 < 1.0f);
+        const unsigned mask = movemask8(hit);
+        if (mask == 0) continue;
+        hits += uint32_t(__builtin_popcount(mask));
+        const V8f psiG = {P.psiG[j[0]], P.psiG[j[1]], P.psiG[j[2]], P.psiG[j[3]],
+                          P.psiG[j[4]], P.psiG[j[5]], P.psiG[j[6]], P.psiG[j[7]]};
+        const V8f w = 1.0f - e2, w3 = w * w * w;
+        sum8 += masked8(hit, psiG * w3);
+        const V8f eta = sqrt8(e2), te = 1.0f - eta;
+        const V8f coef = masked8(hit & (eta > 1e-6f), psiG * te * te / eta);
+        const V8f ga = along * invA2 - along * invB2;  // G²u = ga e + u/β²
+        sx += coef * (ga * ex + invB2 * ux);
+        sy += coef * (ga * ey + invB2 * uy);
+        sz += coef * (ga * ez + invB2 * uz);
+        V8f jvx, jvy, jvz, dragShareG;
+        transpose8(packV, j, &jvx, &jvy, &jvz, &dragShareG);
+        const V8f kk = masked8(hit, w3 * dragShareG);
+        V8f rx = jvx - vx8, ry = jvy - vy8, rz = jvz - vz8;
+        const V8f ra = rx * ex + ry * ey + rz * ez;
+        rx -= ra * ex, ry -= ra * ey, rz -= ra * ez;
+        dx += kk * rx, dy += kk * ry, dz += kk * rz;
+        rate8 += kk;
+      }
+      rho += (rho0 * kPoly6) * total8(sum8);
+      const float p = std::max(0.0f, c2 * (rho - rho0) + background);
+      const float push = p > 0.0f ? p / rho * kSpiky : 0.0f, share = kPoly6 / rho;
+      g.plantAcc[k] = push * Vec3(total8(sx), total8(sy), total8(sz));
+      g.dragAcc[k] = share * Vec3(total8(dx), total8(dy), total8(dz));
+      g.dragRate[k] = share * total8(rate8);
+      g.rho[k] = rho;
+    }
+    g.hitCount[k] = hits;
+    const float p = std::max(0.0f, c2 * (rho - rho0) + background);
+    g.pressure[k] = p;
+    g.invRho[k] = 1.0f / rho;
+    g.pOverRho[k] = p / rho;
+    g.packedX[k] = V4f{g.px[k], g.py[k], g.pz[k], g.invRho[k]};
+    g.packedV[k] = V4f{g.vx[k], g.vy[k], g.vz[k], g.pOverRho[k]};
+  }
+}
+
+// Pressure and viscosity (eq. 11, MCG03 eq. 10 and 14) over the listed neighbours, the walls'
+// pressure and the plants' push, for the particles begin..end:
+// −m (p_i + p_j)/(2ρ_j) ∇W_spiky, ∇W_spiky = −45/(π h⁶)(h − r)² r̂, and
+// μ m (v_j − v_i)/ρ_j ∇²W_visc, ∇²W_visc = 45/(π h⁶)(h − r), with their constants folded.
+template <class Grid, class Walls>
+[[gnu::always_inline]] inline void forcesRange(Grid& g, const Walls& W, const PassConstants& c, size_t begin,
+                                               size_t end) {
+  const V4f* packedX = g.packedX.data();
+  const V4f* packedV = g.packedV.data();
+  const float h = c.h, kp = c.kp, kv = c.kv;
+  for (size_t k = begin; k < end; ++k) {
+    const V4f xk = packedX[k], vk = packedV[k];
+    const float x = xk[0], y = xk[1], z = xk[2], pk = g.pressure[k];
+    const V8f x8 = splat8(x), y8 = splat8(y), z8 = splat8(z), vx8 = splat8(vk[0]), vy8 = splat8(vk[1]),
+              vz8 = splat8(vk[2]);
+    const uint32_t* list = g.nbrBlocks[k / kBlock].data() + g.nbrBegin[k];
+    const uint32_t count = g.nbrCount[k];
+    V8f ax8 = splat8(0.0f), ay8 = ax8, az8 = ax8;
+    // Eight neighbours at a time, each one's packed state transposed into lanes; lanes past
+    // the list repeat its last entry and are masked off.
+    for (uint32_t q = 0; q < count; q += 8) {
+      uint32_t j[8];
+      for (int l = 0; l < 8; ++l) j[l] = list[std::min(q + uint32_t(l), count - 1)];
+      V8f px8, py8, pz8, invRho8, pvx8, pvy8, pvz8, pOverRho8;
+      transpose8(packedX, j, &px8, &py8, &pz8, &invRho8);
+      transpose8(packedV, j, &pvx8, &pvy8, &pvz8, &pOverRho8);
+      const V8f dx = x8 - px8, dy = y8 - py8, dz = z8 - pz8;
+      const V8f r = sqrt8(dx * dx + dy * dy + dz * dz), t = h - r;
+      const V8i live = kLanes8 < int32_t(count - q);
+      const V8f fp = masked8(live, kp * (pk * invRho8 + pOverRho8) * t * t / r);
+      const V8f fv = masked8(live, kv * invRho8 * t);
+      ax8 += fp * dx + fv * (pvx8 - vx8);
+      ay8 += fp * dy + fv * (pvy8 - vy8);
+      az8 += fp * dz + fv * (pvz8 - vz8);
+    }
+    const float rho = g.rho[k];
+    Vec3 a = Vec3(total8(ax8), total8(ay8), total8(az8)) / rho;
+    // Walls: a = −p/(ρ0 ρ) g_w(d) n.
+    const float wall = -pk / (c.rho0 * rho);
+    if (c.closed) a += wall * boxGhostGradient(W, Vec3(x, y, z) - c.dmin, c.dmax - Vec3(x, y, z));
+    if (pk > 0.0f && g.sdf[k] < h) a += wall * W.lookup(W.gradient, g.sdf[k]) * g.sdfNormal[k];
+    if (c.hasPlants) a += g.plantAcc[k];  // the plants' pressure push, from the plant pass
+    g.acc[k] = a;
+  }
+}
+
+// Once per frame, per plant particle j: the air around it with its kernel (eq. 12), Z = Σ V W_j
+// and Σ V W_j v, and the reaction to the air's pressure acceleration −(p/ρ) Ψ ∇W_j (see
+// plantBlock), Σ m (p/ρ) Ψ ∇W_j. The air particles are those within α (the support's longest
+// semi-axis), eight at a time.
+struct PlantGather {
+  float z = 0.0f;
+  Vec3 velocity = Vec3::Zero(), pressureForce = Vec3::Zero();
+};
+template <class Grid, class Plants>
+[[gnu::always_inline]] inline PlantGather plantGather(const Grid& g, const Plants& P, float m, uint32_t j) {
+  const Vec3 xj = P.x[j], axis = P.axis[j];
+  const float invA2 = P.invA2[j], invB2 = P.invB2[j], detG = P.detG[j];
+  const V8f jx = splat8(xj.x()), jy = splat8(xj.y()), jz = splat8(xj.z());
+  const V8f ex = splat8(axis.x()), ey = splat8(axis.y()), ez = splat8(axis.z());
+  V8f z8 = splat8(0.0f), vx8 = z8, vy8 = z8, vz8 = z8, fx8 = z8, fy8 = z8, fz8 = z8;
+  const float weight = m * kPoly6 * detG, push = -m * P.volume[j] * kSpiky * detG;
+  const float reach = (1.0f / std::sqrt(invA2)) * (1.0f + 1e-5f);  // α ≥ β
+  g.forSphereRuns(xj.x(), xj.y(), xj.z(), reach, [&](uint32_t b, uint32_t e) {
+    for (uint32_t k = b; k < e; k += 8) {
+      const V8f ux = load8(&g.px[k]) - jx, uy = load8(&g.py[k]) - jy, uz = load8(&g.pz[k]) - jz;
+      const V8f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
+      const V8f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
+      const V8i hit = (kLanes8 < int32_t(e) - int32_t(k)) & (e2 < 1.0f);
+      if (movemask8(hit) == 0) continue;
+      const V8f rho = load8(&g.rho[k]), p = load8(&g.pressure[k]);
+      const V8f t = 1.0f - e2;
+      const V8f vw = masked8(hit, weight * t * t * t / rho);  // V W_j
+      z8 += vw;
+      vx8 += vw * load8(&g.vx[k]), vy8 += vw * load8(&g.vy[k]), vz8 += vw * load8(&g.vz[k]);
+      // m (p/ρ) Ψ ∇W_j, ∇W_j = det G (−45/π)(1 − |η|)² G²u/|η|, G²u = ga e + u/β².
+      const V8f eta = sqrt8(e2), te = 1.0f - eta;
+      const V8f f = masked8(hit & (p > 0.0f) & (eta > 1e-6f), push * p / rho * te * te / eta);
+      const V8f ga = along * invA2 - along * invB2;
+      fx8 += f * (ga * ex + invB2 * ux);
+      fy8 += f * (ga * ey + invB2 * uy);
+      fz8 += f * (ga * ez + invB2 * uz);
+    }
+  });
+  PlantGather out;
+  out.z = total8(z8);
+  out.velocity = Vec3(total8(vx8), total8(vy8), total8(vz8));
+  out.pressureForce = Vec3(total8(fx8), total8(fy8), total8(fz8));
+  return out;
+}
+
+// The passes twice: for the machine's baseline (SSE2 on x86-64) and, where the CPU has it, for
+// AVX2 (one register per eight lanes; no FMA, so the same operations round the same way and
+// the results are bit-identical). Everything they call is inlined into them (flatten).
+#if TENDRIL_SPH_AVX2
+template <class Grid, class Walls>
+[[gnu::target("avx2"), gnu::flatten]] void densityAvx2(Grid& g, const Walls& W, const PassConstants& c, size_t block) {
+  densityBlock(g, W, c, block);
+}
+template <class Grid, class Plants>
+[[gnu::target("avx2"), gnu::flatten]] void plantAvx2(Grid& g, const Plants& P, const PassConstants& c, size_t block) {
+  plantBlock(g, P, c, block);
+}
+template <class Grid, class Walls>
+[[gnu::target("avx2"), gnu::flatten]] void forcesAvx2(Grid& g, const Walls& W, const PassConstants& c, size_t begin,
+                                                     size_t end) {
+  forcesRange(g, W, c, begin, end);
+}
+template <class Grid, class Plants>
+[[gnu::target("avx2"), gnu::flatten]] PlantGather plantGatherAvx2(const Grid& g, const Plants& P, float m, uint32_t j) {
+  return plantGather(g, P, m, j);
+}
+#endif
+template <class Grid, class Plants>
+[[gnu::flatten]] PlantGather plantGatherGeneric(const Grid& g, const Plants& P, float m, uint32_t j) {
+  return plantGather(g, P, m, j);
+}
+template <class Grid, class Walls>
+[[gnu::flatten]] void densityGeneric(Grid& g, const Walls& W, const PassConstants& c, size_t block) {
+  densityBlock(g, W, c, block);
+}
+template <class Grid, class Plants>
+[[gnu::flatten]] void plantGeneric(Grid& g, const Plants& P, const PassConstants& c, size_t block) {
+  plantBlock(g, P, c, block);
+}
+template <class Grid, class Walls>
+[[gnu::flatten]] void forcesGeneric(Grid& g, const Walls& W, const PassConstants& c, size_t begin, size_t end) {
+  forcesRange(g, W, c, begin, end);
+}
+
+std::atomic<bool> gGenericKernels{false};
+
+bool useAvx2() {
+#if TENDRIL_SPH_AVX2
+  static const bool hasAvx2 = __builtin_cpu_supports("avx2");
+  return hasAvx2 && !gGenericKernels.load(std::memory_order_relaxed);
+#else
+  return false;
+#endif
+}
+
+}  // namespace
 
 // Once per frame, per plant particle: the air velocity around it (eq. 12 with its kernel), its
 // drag coefficient for the frame, and the force the air exerts on it — drag plus the reaction
@@ -802,37 +1118,29 @@ void SphAir::plantSide(particles::ParticleWorld& world) {
   std::vector<Vec3>& external = world.externalAcceleration();
   external.assign(world.capacity(), Vec3::Zero());
   const float rho0 = settings_.restDensity, cd = settings_.dragCoefficient, dt = settings_.dt, m = mass_;
+  const bool avx2 = useAvx2();
   parallelFor(0, P.size(), [&](size_t jj) {
     const uint32_t j = uint32_t(jj);
-    const Vec3 xj = P.x[j];
-    const Vec3 ext = P.extent[j];
-    float z = 0.0f;
-    Vec3 sum = Vec3::Zero(), pressureForce = Vec3::Zero();
-    g.forRuns(g.cellCoord(xj - ext), g.cellCoord(xj + ext), [&](uint32_t b, uint32_t e) {
-      for (uint32_t k = b; k < e; ++k) {
-        const Vec3 u(g.px[k] - xj.x(), g.py[k] - xj.y(), g.pz[k] - xj.z());
-        float along;
-        const float e2 = P.eta2(j, u, &along);
-        if (!(e2 < 1.0f)) continue;
-        const float vw = m / g.rho[k] * P.poly6(j, e2);
-        z += vw;
-        sum += vw * Vec3(g.vx[k], g.vy[k], g.vz[k]);
-        // The reaction to the air's pressure acceleration −(p/ρ) Ψ ∇W (see coupleForces).
-        if (g.pressure[k] > 0.0f) pressureForce += (m * g.pressure[k] / g.rho[k] * P.volume[j]) * P.spikyGradient(j, u, along, e2);
-      }
-    });
+    PlantGather gather;
+#if TENDRIL_SPH_AVX2
+    if (avx2)
+      gather = plantGatherAvx2(g, P, m, j);
+    else
+#endif
+      gather = plantGatherGeneric(g, P, m, j);
+    const float z = gather.z;
     P.invZ[j] = 1.0f / std::max(z, 0.5f);
     const uint32_t i = P.slot[j];
     // Stem drag in cross-flow: F = ½ ρ C_d (2a · 2b) |u⊥| u⊥, u⊥ the relative air velocity
     // across the axis (the axial part's skin friction is neglected).
-    Vec3 rel = sum * P.invZ[j] - P.v[j];
+    Vec3 rel = gather.velocity * P.invZ[j] - P.v[j];
     rel -= rel.dot(P.axis[j]) * P.axis[j];
     const float area = 4.0f * world.halfLength(i) * world.radius(i);
     P.dragK[j] = 0.5f * rho0 * std::min(z, 1.0f) * cd * area * rel.norm();
     P.packV[j] = V4f{P.v[j].x(), P.v[j].y(), P.v[j].z(), P.detG[j] * P.dragK[j] * P.invZ[j]};
     const float mj = world.mass(i);
     // Implicit in the drag, so a light particle never overshoots the air's velocity.
-    external[i] = P.dragK[j] * rel / (mj + P.dragK[j] * dt) + pressureForce / mj;
+    external[i] = P.dragK[j] * rel / (mj + P.dragK[j] * dt) + gather.pressureForce / mj;
   }, 64);
 }
 
@@ -841,212 +1149,61 @@ void SphAir::substep(const env::Environment& env, float dt) {
   const Plants& P = *plants_;
   const Walls& W = *walls_;
   const size_t n = g.size(), blocks = (n + kBlock - 1) / kBlock;
-  const float h = h_, h2 = h * h, invH2 = 1.0f / h2, m = mass_;
-  const float rho0 = settings_.restDensity, c2 = settings_.soundSpeed * settings_.soundSpeed, mu = settings_.viscosity;
-  const float background = backgroundPressure();
-  const float norm6 = kPoly6 / (h * h * h), normSpiky = kSpiky / (h * h * h * h), normVisc = kVisc / (h * h * h * h * h);
-  const bool closed = settings_.boundary == SphBoundary::Closed;
-  const Vec3 dmin = settings_.domainMin, dmax = settings_.domainMax;
+  const float h = h_, m = mass_;
+  PassConstants c;
+  c.n = n, c.h = h, c.h2 = h * h, c.invH2 = 1.0f / (h * h), c.m = m;
+  c.rho0 = settings_.restDensity, c.c2 = settings_.soundSpeed * settings_.soundSpeed;
+  c.background = backgroundPressure();
+  c.norm6 = kPoly6 / (h * h * h);
   // The search radius: h and a hair, so that round-off in the run clipping loses no pair.
-  const float search = h * (1.0f + 1e-5f);
-  g.nbrBlocks.resize(blocks), g.hitBlocks.resize(blocks);
-  g.nbrBegin.resize(n), g.nbrCount.resize(n), g.hitBegin.resize(n), g.hitCount.resize(n);
-  g.invRho.resize(n), g.pOverRho.resize(n), g.packedX.resize(n), g.packedV.resize(n);
-  // Room for `more` entries after `used` in a block's buffer.
-  auto room = [](std::vector<uint32_t>& buffer, size_t used, size_t more) {
-    if (buffer.size() < used + more) buffer.resize(std::max(used + more, 2 * buffer.size()));
-    return buffer.data();
-  };
+  c.search = h * (1.0f + 1e-5f);
+  c.kp = 0.5f * m * (kSpiky / (h * h * h * h)) / (h * h);
+  c.kv = settings_.viscosity * m * (kVisc / (h * h * h * h * h)) / h;
+  c.closed = settings_.boundary == SphBoundary::Closed, c.hasPlants = P.size() > 0;
+  c.dmin = settings_.domainMin, c.dmax = settings_.domainMax;
+  const bool closed = c.closed, hasPlants = c.hasPlants;
+  const Vec3 dmin = c.dmin, dmax = c.dmax;
+  g.nbrBlocks.resize(blocks);
+  g.nbrBegin.resize(n), g.nbrCount.resize(n), g.hitCount.resize(n);
+  g.invRho.resize(n), g.pOverRho.resize(n), g.packedX.resize(n), g.packedV.resize(n), g.plantAcc.resize(n);
+  const bool avx2 = useAvx2();
 
-  // Density (eq. 12 with A = ρ: ρ_i = Σ m W_poly6) plus the walls' mirrored lattices; the same
-  // pass lists the neighbours 0 < r < h for the forces.
   {
     ScopedTimer t(&timings_.density);
     parallelFor(0, blocks, [&](size_t block) {
-      std::vector<uint32_t>& buffer = g.nbrBlocks[block];
-      size_t used = 0;
-      for (size_t k = block * kBlock, end = std::min(n, k + kBlock); k < end; ++k) {
-        const float x = g.px[k], y = g.py[k], z = g.pz[k];
-        g.nbrBegin[k] = uint32_t(used);
-        // Four candidates at a time (the arrays are padded), lanes past the run masked off;
-        // four partial sums, added in a fixed order. Eight per loop trip: a run holds about
-        // eight candidates, and a loop exit fewer to mispredict saved 7% of the pass's time.
-        const V4f x4 = splat(x), y4 = splat(y), z4 = splat(z);
-        V4f sum4 = splat(0.0f);
-        g.forSphereRuns(x, y, z, search, [&](uint32_t b, uint32_t e) {
-          uint32_t* out = room(buffer, used, e - b + 4);
-          auto four = [&](uint32_t j) {
-            const V4f dx = load4(&g.px[j]) - x4, dy = load4(&g.py[j]) - y4, dz = load4(&g.pz[j]) - z4;
-            const V4f r2 = dx * dx + dy * dy + dz * dz;
-            const V4i inRun = kLanes < int32_t(e) - int32_t(j);
-            const V4f t = select(inRun & (r2 < h2), 1.0f - r2 * invH2);
-            sum4 += t * t * t;
-            used += appendLanes(movemask(inRun & (r2 < h2) & (r2 > 0.0f)), j, out + used);
-          };
-          for (uint32_t j = b; j < e; j += 8) four(j), four(j + 4);
-        });
-        g.nbrCount[k] = uint32_t(used - g.nbrBegin[k]);
-        const float sum = (sum4[0] + sum4[1]) + (sum4[2] + sum4[3]);
-        float rho = m * norm6 * sum;
-        rho += W.lookup(W.density, g.sdf[k]);
-        if (closed) rho += boxGhostDensity(W, Vec3(x, y, z) - dmin, dmax - Vec3(x, y, z));  // walls
-        g.rho[k] = rho;
-      }
+#if TENDRIL_SPH_AVX2
+      if (avx2) return densityAvx2(g, W, c, block);
+#endif
+      densityGeneric(g, W, c, block);
     }, 1);
   }
-
-  // Plants add to the density like boundary particles of volume Ψ (eq. 12–13), and the plant
-  // particles whose support holds the air particle are listed; then the equation of state.
   {
     ScopedTimer t(&timings_.coupling);
-    const bool hasPlants = P.size() > 0;
     parallelFor(0, blocks, [&](size_t block) {
-      std::vector<uint32_t>& buffer = g.hitBlocks[block];
-      size_t used = 0;
-      for (size_t k = block * kBlock, end = std::min(n, k + kBlock); k < end; ++k) {
-        float rho = g.rho[k];
-        g.hitBegin[k] = uint32_t(used);
-        if (hasPlants) {
-          const Vec3 x(g.px[k], g.py[k], g.pz[k]);
-          const uint32_t bin = P.binOf(x), b = P.start[bin], e = P.start[bin + 1];
-          uint32_t* out = room(buffer, used, e - b + 4);
-          // Four candidates at a time (their packed state transposed into lanes; lanes past the
-          // list read the next bin's entries or the padding and are masked off), four partial
-          // sums; the hits compress-stored.
-          const V4f x4 = splat(x.x()), y4 = splat(x.y()), z4 = splat(x.z());
-          V4f sum4 = splat(0.0f);
-          for (uint32_t q = b; q < e; q += 4) {
-            const uint32_t* j = &P.entries[q];
-            V4f jx, jy, jz, invA2, ex, ey, ez, invB2;
-            transpose(P.packX[j[0]], P.packX[j[1]], P.packX[j[2]], P.packX[j[3]], &jx, &jy, &jz, &invA2);
-            transpose(P.packAxis[j[0]], P.packAxis[j[1]], P.packAxis[j[2]], P.packAxis[j[3]], &ex, &ey, &ez, &invB2);
-            const V4f psiG = {P.psiG[j[0]], P.psiG[j[1]], P.psiG[j[2]], P.psiG[j[3]]};
-            const V4f ux = x4 - jx, uy = y4 - jy, uz = z4 - jz;
-            const V4f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
-            const V4f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
-            const V4i hit = (kLanes < int32_t(e - q)) & (e2 < 1.0f);
-            const V4f t = 1.0f - e2;
-            sum4 += masked(hit, (rho0 * kPoly6) * psiG * t * t * t);
-            used += appendPicked(movemask(hit), j, out + used);
-          }
-          rho += (sum4[0] + sum4[1]) + (sum4[2] + sum4[3]);
-          g.rho[k] = rho;
-        }
-        g.hitCount[k] = uint32_t(used - g.hitBegin[k]);
-        const float p = std::max(0.0f, c2 * (rho - rho0) + background);
-        g.pressure[k] = p;
-        g.invRho[k] = 1.0f / rho;
-        g.pOverRho[k] = p / rho;
-        g.packedX[k] = V4f{g.px[k], g.py[k], g.pz[k], g.invRho[k]};
-        g.packedV[k] = V4f{g.vx[k], g.vy[k], g.vz[k], g.pOverRho[k]};
-      }
+#if TENDRIL_SPH_AVX2
+      if (avx2) return plantAvx2(g, P, c, block);
+#endif
+      plantGeneric(g, P, c, block);
     }, 1);
   }
 
   timings_.particles += n;
   for (size_t k = 0; k < n; ++k) timings_.airPairs += g.nbrCount[k], timings_.plantPairs += g.hitCount[k];
 
-  // Pressure and viscosity (eq. 11, MCG03 eq. 10 and 14) over the listed neighbours, walls'
-  // pressure.
   {
     ScopedTimer t(&timings_.forces);
-    // −m (p_i + p_j)/(2ρ_j) ∇W_spiky, ∇W_spiky = −45/(π h⁶)(h − r)² r̂, and
-    // μ m (v_j − v_i)/ρ_j ∇²W_visc, ∇²W_visc = 45/(π h⁶)(h − r), with their constants folded.
-    const float kp = 0.5f * m * normSpiky / (h * h), kv = mu * m * normVisc / h;
-    const V4f* packedX = g.packedX.data();
-    const V4f* packedV = g.packedV.data();
-    parallelFor(0, n, [&](size_t k) {
-      const V4f xk = packedX[k], vk = packedV[k];
-      const float x = xk[0], y = xk[1], z = xk[2], pk = g.pressure[k];
-      const V4f x4 = splat(x), y4 = splat(y), z4 = splat(z), vx4 = splat(vk[0]), vy4 = splat(vk[1]), vz4 = splat(vk[2]);
-      const uint32_t* list = g.nbrBlocks[k / kBlock].data() + g.nbrBegin[k];
-      const uint32_t count = g.nbrCount[k];
-      V4f ax4 = splat(0.0f), ay4 = ax4, az4 = ax4;
-      // Four neighbours at a time, each one's packed state transposed into lanes; lanes past
-      // the list repeat its last entry and are masked off.
-      for (uint32_t c = 0; c < count; c += 4) {
-        uint32_t j[4];
-        for (int l = 0; l < 4; ++l) j[l] = list[std::min(c + uint32_t(l), count - 1)];
-        V4f px4, py4, pz4, invRho4, pvx4, pvy4, pvz4, pOverRho4;
-        transpose(packedX[j[0]], packedX[j[1]], packedX[j[2]], packedX[j[3]], &px4, &py4, &pz4, &invRho4);
-        transpose(packedV[j[0]], packedV[j[1]], packedV[j[2]], packedV[j[3]], &pvx4, &pvy4, &pvz4, &pOverRho4);
-        const V4f dx = x4 - px4, dy = y4 - py4, dz = z4 - pz4;
-        const V4f r = sqrt4(dx * dx + dy * dy + dz * dz), t = h - r;
-        const V4i live = kLanes < int32_t(count - c);
-        const V4f fp = masked(live, kp * (pk * invRho4 + pOverRho4) * t * t / r);
-        const V4f fv = masked(live, kv * invRho4 * t);
-        ax4 += fp * dx + fv * (pvx4 - vx4);
-        ay4 += fp * dy + fv * (pvy4 - vy4);
-        az4 += fp * dz + fv * (pvz4 - vz4);
-      }
-      const float ax = (ax4[0] + ax4[1]) + (ax4[2] + ax4[3]);
-      const float ay = (ay4[0] + ay4[1]) + (ay4[2] + ay4[3]);
-      const float az = (az4[0] + az4[1]) + (az4[2] + az4[3]);
-      const float rho = g.rho[k];
-      Vec3 a = Vec3(ax, ay, az) / rho;
-      // Walls: a = −p/(ρ0 ρ) g_w(d) n.
-      const float wall = -pk / (rho0 * rho);
-      if (closed) a += wall * boxGhostGradient(W, Vec3(x, y, z) - dmin, dmax - Vec3(x, y, z));
-      if (pk > 0.0f && g.sdf[k] < h) a += wall * W.lookup(W.gradient, g.sdf[k]) * g.sdfNormal[k];
-      g.acc[k] = a;
+    parallelForRange(0, n, [&](size_t begin, size_t end) {
+#if TENDRIL_SPH_AVX2
+      if (avx2) return forcesAvx2(g, W, c, begin, end);
+#endif
+      forcesGeneric(g, W, c, begin, end);
     }, kGrain);
-  }
-
-  // Plants push the air (boundary pressure with their anisotropic kernel) and drag it.
-  {
-    ScopedTimer t(&timings_.coupling);
-    if (P.size() > 0)
-      parallelFor(0, n, [&](size_t k) {
-        const Vec3 x(g.px[k], g.py[k], g.pz[k]), v(g.vx[k], g.vy[k], g.vz[k]);
-        const float rho = g.rho[k], pk = g.pressure[k], volume = m / rho;
-        const uint32_t* list = g.hitBlocks[k / kBlock].data() + g.hitBegin[k];
-        const uint32_t count = g.hitCount[k];
-        const V4f x4 = splat(x.x()), y4 = splat(x.y()), z4 = splat(x.z());
-        const V4f vx4 = splat(v.x()), vy4 = splat(v.y()), vz4 = splat(v.z());
-        // Mirrored pressure on a boundary particle of volume Ψ: −(p/ρ) Ψ ∇W, with
-        // ∇W = det G (−45/π)(1 − |η|)² G²u/|η|, G²u = (u·e) e/α² + (u − (u·e) e)/β².
-        const float push = pk > 0.0f ? pk / rho * kSpiky : 0.0f;
-        V4f ax = splat(0.0f), ay = ax, az = ax, dx = ax, dy = ax, dz = ax, rate4 = ax;
-        for (uint32_t c = 0; c < count; c += 4) {
-          uint32_t j[4];
-          for (int l = 0; l < 4; ++l) j[l] = list[std::min(c + uint32_t(l), count - 1)];
-          V4f jx, jy, jz, invA2, ex, ey, ez, invB2, jvx, jvy, jvz, dragShareG;
-          transpose(P.packX[j[0]], P.packX[j[1]], P.packX[j[2]], P.packX[j[3]], &jx, &jy, &jz, &invA2);
-          transpose(P.packAxis[j[0]], P.packAxis[j[1]], P.packAxis[j[2]], P.packAxis[j[3]], &ex, &ey, &ez, &invB2);
-          transpose(P.packV[j[0]], P.packV[j[1]], P.packV[j[2]], P.packV[j[3]], &jvx, &jvy, &jvz, &dragShareG);
-          const V4f psiG = {P.psiG[j[0]], P.psiG[j[1]], P.psiG[j[2]], P.psiG[j[3]]};
-          const V4i live = kLanes < int32_t(count - c);
-          const V4f ux = x4 - jx, uy = y4 - jy, uz = z4 - jz;
-          const V4f along = ux * ex + uy * ey + uz * ez, a2 = along * along;
-          const V4f e2 = a2 * invA2 + (ux * ux + uy * uy + uz * uz - a2) * invB2;  // eq. 13
-          const V4f eta = sqrt4(e2), t = 1.0f - eta;
-          const V4f coef = masked(live & (eta > 1e-6f), push * psiG * t * t / eta);
-          const V4f ga = along * invA2 - along * invB2;  // G²u = ga e + u/β²
-          ax += coef * (ga * ex + invB2 * ux);
-          ay += coef * (ga * ey + invB2 * uy);
-          az += coef * (ga * ez + invB2 * uz);
-          // The air's share φ = V W / max(Z, ½) of the plant particle's drag k (v_j − v)⊥.
-          const V4f w = 1.0f - e2;
-          const V4f kk = masked(live, (volume * kPoly6) * w * w * w * dragShareG);
-          V4f rx = jvx - vx4, ry = jvy - vy4, rz = jvz - vz4;
-          const V4f ra = rx * ex + ry * ey + rz * ez;
-          rx -= ra * ex, ry -= ra * ey, rz -= ra * ez;
-          dx += kk * rx, dy += kk * ry, dz += kk * rz;
-          rate4 += kk;
-        }
-        auto total = [](V4f v) { return (v[0] + v[1]) + (v[2] + v[3]); };
-        const Vec3 a(total(ax), total(ay), total(az)), drag(total(dx), total(dy), total(dz));
-        const float rate = total(rate4);
-        g.acc[k] += a;
-        g.dragAcc[k] = drag / m;
-        g.dragRate[k] = rate / m;
-      }, kGrain);
   }
 
   // Symplectic Euler, then the domain and the obstacles.
   {
     ScopedTimer t(&timings_.obstacles);
-    const bool hasPlants = P.size() > 0, hasObstacles = env.obstacleCount() > 0;
+    const bool hasObstacles = env.obstacleCount() > 0;
     const float vmax = settings_.soundSpeed, rmin = 0.25f * settings_.spacing;
     parallelFor(0, n, [&](size_t k) {
       const uint32_t i = g.order[k];
@@ -1191,9 +1348,9 @@ CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells)
 
 uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out) { return wind::appendLanes(mask & 15u, base, out); }
 
-uint32_t appendPicked(unsigned mask, const uint32_t* values, uint32_t* out) {
-  return wind::appendPicked(mask & 15u, values, out);
-}
+
+bool avx2Kernels() { return useAvx2(); }
+void forceBaselineKernels(bool on) { gGenericKernels.store(on, std::memory_order_relaxed); }
 
 }  // namespace detail
 

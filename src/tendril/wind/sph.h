@@ -190,8 +190,12 @@ CellSpan rowCells(float x, float halfWidth, float origin, float edge, int cells)
 // out[0], out[1], …, and returns how many. Always writes four entries: the ones past the count
 // are scratch, so out needs room for four.
 uint32_t appendLanes(unsigned mask, uint32_t base, uint32_t* out);
-// The same with values[l] for the set lanes l (values holds four).
-uint32_t appendPicked(unsigned mask, const uint32_t* values, uint32_t* out);
+
+// The air's passes are compiled twice, for the baseline instruction set and for AVX2, and the
+// AVX2 ones run where the CPU has it; both give bit-identical results. Whether the AVX2 ones
+// run now, and a switch that keeps to the baseline ones (process-wide, for tests).
+bool avx2Kernels();
+void forceBaselineKernels(bool on);
 
 }  // namespace detail
 
