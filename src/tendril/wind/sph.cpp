@@ -218,8 +218,16 @@ struct SphAir::Grid {
   std::vector<uint32_t> cellOf;  // per particle (kDead: not in the grid)
   std::vector<uint32_t> start;   // per cell + 1
   std::vector<uint32_t> order;   // grid index → particle index
-  // Grid-ordered copies.
+  // Grid-ordered copies. Within a frame the substeps keep the state here (positions,
+  // velocities, densities and obstacle distances move with the particle when the grid is
+  // re-sorted), and it goes back to the particles' arrays at the end of the frame.
   std::vector<float> px, py, pz, vx, vy, vz, rho, pressure, sdf;
+  std::vector<float> budget;     // sdfBudget_ of the particle
+  std::vector<uint32_t> cell;    // the cell after the substep's move (kDead: left the domain)
+  // The re-sort's scratch: the next order's arrays, swapped in.
+  std::vector<uint32_t> perm, next, order2;
+  std::vector<float> px2, py2, pz2, vx2, vy2, vz2, rho2, sdf2, budget2;
+  std::vector<Vec3> sdfNormal2;
   std::vector<float> invRho, pOverRho;  // 1/ρ and p/ρ, from the equation of state
   // The same packed per particle for the forces' 4-wide gathers: (x, y, z, 1/ρ), (v, p/ρ).
   std::vector<V4f> packedX, packedV;
@@ -721,7 +729,7 @@ void SphAir::buildGrid() {
     for (size_t i = 0; i < n; ++i)
       if (g.cellOf[i] != kDead) g.order[next[g.cellOf[i]]++] = uint32_t(i);
   }
-  for (auto* a : {&g.sdf, &g.dragRate}) a->resize(live);
+  for (auto* a : {&g.sdf, &g.dragRate, &g.budget}) a->resize(live);
   // Padded by eight for 8-wide loads (the padding is masked off).
   for (auto* a : {&g.px, &g.py, &g.pz, &g.vx, &g.vy, &g.vz, &g.rho, &g.pressure}) a->assign(live + 8, 0.0f);
   g.sdfNormal.resize(live), g.acc.resize(live), g.dragAcc.resize(live);
@@ -735,6 +743,60 @@ void SphAir::buildGrid() {
     g.pressure[k] = std::max(0.0f, c2 * (rho_[i] - rho0) + background);
     g.sdf[k] = sdf_[i];
     g.sdfNormal[k] = sdfNormal_[i];
+    g.budget[k] = sdfBudget_[i];
+  }, 2048);
+}
+
+// Re-sorts the grid after a substep by the cells its particles moved into (g.cell), stable in
+// the current grid order, dropping those that left the domain; every grid-ordered array of the
+// state moves with its particle. Particles move a fraction of a cell per substep, so the
+// gathers are nearly sequential.
+void SphAir::regrid() {
+  Grid& g = *grid_;
+  const size_t n = g.size();
+  std::fill(g.start.begin(), g.start.end(), 0u);
+  size_t live = 0;
+  for (size_t k = 0; k < n; ++k)
+    if (g.cell[k] != kDead) ++g.start[g.cell[k] + 1], ++live;
+  for (size_t c = 1; c < g.start.size(); ++c) g.start[c] += g.start[c - 1];
+  g.next.assign(g.start.begin(), g.start.end() - 1);
+  g.perm.resize(live);
+  for (size_t k = 0; k < n; ++k)
+    if (g.cell[k] != kDead) g.perm[g.next[g.cell[k]]++] = uint32_t(k);
+  // Padded by eight (zeros) like the arrays they replace.
+  for (auto* a : {&g.px2, &g.py2, &g.pz2, &g.vx2, &g.vy2, &g.vz2, &g.rho2}) {
+    a->resize(live + 8);
+    std::fill(a->begin() + ptrdiff_t(live), a->end(), 0.0f);
+  }
+  g.sdf2.resize(live), g.budget2.resize(live), g.sdfNormal2.resize(live), g.order2.resize(live);
+  parallelFor(0, live, [&](size_t k2) {
+    const uint32_t k = g.perm[k2];
+    g.px2[k2] = g.px[k], g.py2[k2] = g.py[k], g.pz2[k2] = g.pz[k];
+    g.vx2[k2] = g.vx[k], g.vy2[k2] = g.vy[k], g.vz2[k2] = g.vz[k];
+    g.rho2[k2] = g.rho[k], g.sdf2[k2] = g.sdf[k], g.budget2[k2] = g.budget[k];
+    g.sdfNormal2[k2] = g.sdfNormal[k];
+    g.order2[k2] = g.order[k];
+  }, 2048);
+  std::swap(g.px, g.px2), std::swap(g.py, g.py2), std::swap(g.pz, g.pz2);
+  std::swap(g.vx, g.vx2), std::swap(g.vy, g.vy2), std::swap(g.vz, g.vz2);
+  std::swap(g.rho, g.rho2), std::swap(g.sdf, g.sdf2), std::swap(g.budget, g.budget2);
+  std::swap(g.sdfNormal, g.sdfNormal2), std::swap(g.order, g.order2);
+  g.pressure.resize(live + 8);
+  for (auto* a : {&g.dragRate}) a->resize(live);
+  g.acc.resize(live), g.dragAcc.resize(live);
+}
+
+// The grid-ordered state back to the particles' arrays (the end of a frame's substeps).
+void SphAir::scatterGrid() {
+  const Grid& g = *grid_;
+  parallelFor(0, g.size(), [&](size_t k) {
+    const uint32_t i = g.order[k];
+    x_[i] = Vec3(g.px[k], g.py[k], g.pz[k]);
+    v_[i] = Vec3(g.vx[k], g.vy[k], g.vz[k]);
+    rho_[i] = g.rho[k];
+    sdfBudget_[i] = g.budget[k];
+    sdf_[i] = g.sdf[k];
+    sdfNormal_[i] = g.sdfNormal[k];
   }, 2048);
 }
 
@@ -1200,13 +1262,14 @@ void SphAir::substep(const env::Environment& env, float dt) {
     }, kGrain);
   }
 
-  // Symplectic Euler, then the domain and the obstacles.
+  // Symplectic Euler, then the domain and the obstacles, in the grid's arrays; each particle's
+  // new cell for the re-sort.
   {
     ScopedTimer t(&timings_.obstacles);
     const bool hasObstacles = env.obstacleCount() > 0;
     const float vmax = settings_.soundSpeed, rmin = 0.25f * settings_.spacing;
+    g.cell.resize(n);
     parallelFor(0, n, [&](size_t k) {
-      const uint32_t i = g.order[k];
       Vec3 v(g.vx[k], g.vy[k], g.vz[k]);
       v += dt * g.acc[k];
       if (hasPlants) v += dt * g.dragAcc[k] / (1.0f + dt * g.dragRate[k]);  // implicit in the drag
@@ -1215,33 +1278,44 @@ void SphAir::substep(const env::Environment& env, float dt) {
       if (speed > vmax) v *= vmax / speed;
       const Vec3 x0(g.px[k], g.py[k], g.pz[k]);
       Vec3 x = x0 + dt * v;
+      bool dead = false;
       if (closed) {
         for (int c = 0; c < 3; ++c) {
           if (x[c] < dmin[c] + rmin) x[c] = dmin[c] + rmin, v[c] = std::max(v[c], 0.0f);
           if (x[c] > dmax[c] - rmin) x[c] = dmax[c] - rmin, v[c] = std::min(v[c], 0.0f);
         }
       } else if ((x.array() < dmin.array()).any() || (x.array() > dmax.array()).any()) {
-        dead_[i] = 1;
+        dead = true;
+        dead_[g.order[k]] = 1;
       }
       if (hasObstacles) {
-        sdfBudget_[i] -= kSdfLipschitz * (x - x0).norm();
-        x_[i] = x;
-        if (sdfBudget_[i] < h) {
-          querySdf(env, i);
+        g.budget[k] -= kSdfLipschitz * (x - x0).norm();
+        if (g.budget[k] < h) {
+          // The distance where the particle moved (as querySdf).
+          Vec3 nrm;
+          const float d = env.signedDistance(x, &nrm);
+          g.budget[k] = d;
+          const bool near = d < h && nrm.squaredNorm() > 0.0f;
+          g.sdf[k] = near ? d : kInf;
+          g.sdfNormal[k] = near ? nrm : Vec3::Zero();
           // Push out of the obstacle and remove the velocity into it.
-          if (sdf_[i] < rmin) {
-            const Vec3 nrm = sdfNormal_[i];
-            x += (rmin - sdf_[i]) * nrm;
+          if (g.sdf[k] < rmin) {
+            x += (rmin - g.sdf[k]) * nrm;
             const float vn = v.dot(nrm);
             if (vn < 0.0f) v -= vn * nrm;
-            sdf_[i] = rmin;
-            sdfBudget_[i] = rmin;
+            g.sdf[k] = rmin;
+            g.budget[k] = rmin;
           }
         }
       }
-      x_[i] = x;
-      v_[i] = v;
-      rho_[i] = g.rho[k];
+      g.px[k] = x.x(), g.py[k] = x.y(), g.pz[k] = x.z();
+      g.vx[k] = v.x(), g.vy[k] = v.y(), g.vz[k] = v.z();
+      if (dead) {
+        g.cell[k] = kDead;
+      } else {
+        const Eigen::Vector3i c = g.cellCoord(x);
+        g.cell[k] = g.cellIndex(c.x(), c.y(), c.z());
+      }
     }, kGrain);
   }
 }
@@ -1301,9 +1375,13 @@ void SphAir::step(const env::Environment& env, particles::ParticleWorld* plants)
   for (int s = 0; s < substeps; ++s) {
     substep(env, dt);
     ScopedTimer t(&timings_.neighbours);
-    buildGrid();
+    if (s + 1 < substeps) regrid();
   }
   timings_.substeps = substeps;
+  {
+    ScopedTimer t(&timings_.neighbours);
+    scatterGrid();
+  }
 
   emit(env);
   removeDead();

@@ -146,6 +146,8 @@ class SphAir final : public env::AirFlow {
   void emit(const env::Environment& env);
   void removeDead();
   void buildGrid();
+  void regrid();
+  void scatterGrid();
   void collectPlants(const particles::ParticleWorld& plants);
   void plantSide(particles::ParticleWorld& plants);
   void substep(const env::Environment& env, float dt);
