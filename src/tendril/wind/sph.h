@@ -69,6 +69,8 @@ struct SphEmitter {
 // benchmarks, never for behaviour).
 struct SphTimings {
   double neighbours = 0, density = 0, forces = 0, coupling = 0, obstacles = 0, total = 0;
+  // The part of `coupling` spent once per frame: binning the plants and their gather of the air.
+  double plantFrame = 0;
   int substeps = 0;
   // Summed over the substeps: air particles, their air neighbours (0 < r < h) and the plant
   // particles whose support holds them.
