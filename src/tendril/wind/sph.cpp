@@ -56,36 +56,12 @@ constexpr float kSdfLipschitz = 1.75f;
 // extensions, SSE on x86-64 and NEON on ARM.
 using V4f = float __attribute__((vector_size(16)));
 using V4i = int32_t __attribute__((vector_size(16)));
-constexpr V4i kLanes = {0, 1, 2, 3};
-inline V4f splat(float v) { return V4f{v, v, v, v}; }
-inline V4f load4(const float* p) {
-  V4f v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-// v where the mask is set, else 0 (and 0 where v ≤ 0).
-inline V4f select(V4i mask, V4f v) {
-  mask &= (v > 0.0f);
-  return (V4f)(mask & (V4i)v);
-}
-
-// v where the mask is set, else 0 (whatever v is there, NaN included).
-inline V4f masked(V4i mask, V4f v) { return (V4f)(mask & (V4i)v); }
 inline V4f sqrt4(V4f v) {
 #if defined(__SSE__)
   return (V4f)_mm_sqrt_ps((__m128)v);
 #else
   return V4f{std::sqrt(v[0]), std::sqrt(v[1]), std::sqrt(v[2]), std::sqrt(v[3])};
 #endif
-}
-// Rows a, b, c, d of a 4 × 4 matrix to its columns.
-inline void transpose(V4f a, V4f b, V4f c, V4f d, V4f* x, V4f* y, V4f* z, V4f* w) {
-  const V4f t0 = __builtin_shufflevector(a, b, 0, 4, 1, 5), t1 = __builtin_shufflevector(c, d, 0, 4, 1, 5);
-  const V4f t2 = __builtin_shufflevector(a, b, 2, 6, 3, 7), t3 = __builtin_shufflevector(c, d, 2, 6, 3, 7);
-  *x = __builtin_shufflevector(t0, t1, 0, 1, 4, 5);
-  *y = __builtin_shufflevector(t0, t1, 2, 3, 6, 7);
-  *z = __builtin_shufflevector(t2, t3, 0, 1, 4, 5);
-  *w = __builtin_shufflevector(t2, t3, 2, 3, 6, 7);
 }
 
 // The substep's passes are also compiled for AVX2 and chosen at run time (GCC and Clang on
@@ -207,9 +183,9 @@ void checkRange(const char* key, float v, float lo, float hi, const char* unit) 
 }  // namespace
 
 // A uniform grid over the domain, cells of h/8 along x and h across (h/4 or h/2 along x, or
-// cubes of h, when that would be too many cells), rebuilt by counting sort after every
-// substep, and the particles' state copied into grid order (structure of arrays), so that a
-// particle's neighbours lie in contiguous runs (one per row of x-adjacent cells), each run
+// cubes of h, when that would be too many cells): the particles' state copied into grid order
+// (structure of arrays) at the start of a frame and re-sorted by counting sort after every
+// substep (regrid), so that a particle's neighbours lie in contiguous runs (one per row of x-adjacent cells), each run
 // clipped to the sphere of radius h around it.
 struct SphAir::Grid {
   Vec3 origin = Vec3::Zero();
@@ -229,7 +205,7 @@ struct SphAir::Grid {
   std::vector<float> px2, py2, pz2, vx2, vy2, vz2, rho2, sdf2, budget2;
   std::vector<Vec3> sdfNormal2;
   std::vector<float> invRho, pOverRho;  // 1/ρ and p/ρ, from the equation of state
-  // The same packed per particle for the forces' 4-wide gathers: (x, y, z, 1/ρ), (v, p/ρ).
+  // The same packed per particle for the forces' gathers: (x, y, z, 1/ρ), (v, p/ρ).
   std::vector<V4f> packedX, packedV;
   std::vector<Vec3> sdfNormal;
   // Grid-ordered results of a substep.
@@ -248,15 +224,6 @@ struct SphAir::Grid {
     return Eigen::Vector3i(cellAxis(p.x(), 0), cellAxis(p.y(), 1), cellAxis(p.z(), 2));
   }
   uint32_t cellIndex(int x, int y, int z) const { return uint32_t((size_t(z) * dims.y() + y) * dims.x() + x); }
-  // Calls f(begin, end) for the grid-index runs (one per row of x-adjacent cells) of the box lo..hi.
-  template <class F>
-  void forRuns(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi, F&& f) const {
-    for (int z = lo.z(); z <= hi.z(); ++z)
-      for (int y = lo.y(); y <= hi.y(); ++y) {
-        const uint32_t b = start[cellIndex(lo.x(), y, z)], e = start[cellIndex(hi.x(), y, z) + 1];
-        if (b < e) f(b, e);
-      }
-  }
   // The gap between v and the slab of cell c along axis k (0 inside it); the outermost cells
   // reach to infinity, as particles outside the domain are binned into them.
   float gap(float v, int k, int c) const {
@@ -315,7 +282,7 @@ struct SphAir::Plants {
   std::vector<float> dragK;         // k = ½ ρ C_d A |u⊥| (kg/s), fixed over a frame
   std::vector<float> invZ;          // 1 / max(Σ V W, ½), fixed over a frame
   std::vector<Vec3> extent;         // half-extents of the support's bounding box
-  // The same packed for 4-wide gathers: (x, 1/α²), (axis, 1/β²), (v, det G k/max(Z, ½)), and
+  // The same packed for the plant pass's gathers: (x, 1/α²), (axis, 1/β²), (v, det G k/max(Z, ½)), and
   // Ψ det G (the factors always met together, folded).
   std::vector<V4f> packX, packAxis, packV;
   std::vector<float> psiG;
@@ -338,24 +305,6 @@ struct SphAir::Plants {
     slot.clear(), x.clear(), axis.clear(), v.clear(), invA2.clear(), invB2.clear(), detG.clear();
     volume.clear(), dragK.clear(), invZ.clear(), extent.clear(), start.clear();  // entries: overwritten
     packX.clear(), packAxis.clear(), packV.clear(), psiG.clear();
-  }
-  // η² = |G(x − x_j)|² for the ellipsoid of j (eq. 13), with u = x − x_j.
-  float eta2(uint32_t j, const Vec3& u, float* along) const {
-    const float a = u.dot(axis[j]);
-    *along = a;
-    return a * a * invA2[j] + (u.squaredNorm() - a * a) * invB2[j];
-  }
-  // ∇_x W_spiky(G(x − x_j)) = det G · (−45/π)(1 − |η|)² Gᵀη/|η|, with Gᵀη = G²u.
-  Vec3 spikyGradient(uint32_t j, const Vec3& u, float along, float e2) const {
-    const float eta = std::sqrt(e2);
-    if (!(eta > 1e-6f)) return Vec3::Zero();
-    const Vec3 g2u = along * invA2[j] * axis[j] + invB2[j] * (u - along * axis[j]);
-    const float t = 1.0f - eta;
-    return (-kSpiky * detG[j] * t * t / eta) * g2u;
-  }
-  float poly6(uint32_t j, float e2) const {
-    const float t = 1.0f - e2;
-    return kPoly6 * detG[j] * t * t * t;
   }
 };
 
