@@ -274,30 +274,32 @@ TEST(SphCoupling, APlantInAStreamBendsDownwindAndSlowsTheAirInItsLee) {
   EXPECT_GT(leeAlone, 0.9 * wind) << "without plants the stream keeps its speed";
 }
 
-TEST(SphCoupling, ResultsAreTheSameForAnyThreadCount) {
+// The hash of the air and the plants (positions and the air's push on them) after 12 coupled
+// frames of a stream at `speed` through the clump, at a coarse 7 cm spacing.
+uint64_t coupledRunHash(float speed) {
   Tunnel tunnel = windTunnel();
   tunnel.settings.spacing = 0.07f;
-  const particles::ParticleWorld grown = grownClump(*tunnel.env);
-  auto run = [&](float speed) {
-    particles::ParticleWorld w = grown;
-    SphAir air = streamingAir(tunnel, speed);
-    for (int frame = 0; frame < 12; ++frame) {
-      air.step(*tunnel.env, &w);
-      w.step(*tunnel.env);
-    }
-    Hasher h;
-    h.add(air.positions());
-    h.add(air.velocities());
-    h.add(air.densities());
-    for (uint32_t i = 0; i < w.capacity(); ++i)
-      if (w.active(i)) h.add(w.position(i));
-    return h.digest();
-  };
+  particles::ParticleWorld w = grownClump(*tunnel.env);
+  SphAir air = streamingAir(tunnel, speed);
+  for (int frame = 0; frame < 12; ++frame) {
+    air.step(*tunnel.env, &w);
+    w.step(*tunnel.env);
+  }
+  Hasher h;
+  h.add(air.positions());
+  h.add(air.velocities());
+  h.add(air.densities());
+  for (uint32_t i = 0; i < w.capacity(); ++i)
+    if (w.active(i)) h.add(w.position(i)), h.add(w.externalAcceleration()[i]);
+  return h.digest();
+}
+
+TEST(SphCoupling, ResultsAreTheSameForAnyThreadCount) {
   setThreadCount(1);
-  const uint64_t one = run(3.0f);
+  const uint64_t one = coupledRunHash(3.0f);
   setThreadCount(2);
-  const uint64_t two = run(3.0f);
-  const uint64_t other = run(3.1f);
+  const uint64_t two = coupledRunHash(3.0f);
+  const uint64_t other = coupledRunHash(3.1f);
   setThreadCount(0);
   EXPECT_EQ(one, two);
   EXPECT_NE(one, other);
@@ -307,28 +309,10 @@ TEST(SphCoupling, ResultsAreTheSameForAnyThreadCount) {
 // do the same operations in the same order, without fused multiply-adds: the same bits.
 TEST(SphCoupling, Avx2AndBaselinePassesGiveTheSameResults) {
   if (!detail::avx2Kernels()) GTEST_SKIP() << "this CPU runs only the baseline passes";
-  Tunnel tunnel = windTunnel();
-  tunnel.settings.spacing = 0.07f;
-  const particles::ParticleWorld grown = grownClump(*tunnel.env);
-  auto run = [&] {
-    particles::ParticleWorld w = grown;
-    SphAir air = streamingAir(tunnel, 3.0f);
-    for (int frame = 0; frame < 12; ++frame) {
-      air.step(*tunnel.env, &w);
-      w.step(*tunnel.env);
-    }
-    Hasher h;
-    h.add(air.positions());
-    h.add(air.velocities());
-    h.add(air.densities());
-    for (uint32_t i = 0; i < w.capacity(); ++i)
-      if (w.active(i)) h.add(w.position(i)), h.add(w.externalAcceleration()[i]);
-    return h.digest();
-  };
-  const uint64_t avx2 = run();
+  const uint64_t avx2 = coupledRunHash(3.0f);
   detail::forceBaselineKernels(true);
   EXPECT_FALSE(detail::avx2Kernels());
-  const uint64_t baseline = run();
+  const uint64_t baseline = coupledRunHash(3.0f);
   detail::forceBaselineKernels(false);
   EXPECT_EQ(avx2, baseline);
 }
