@@ -317,6 +317,33 @@ TEST(SphCoupling, Avx2AndBaselinePassesGiveTheSameResults) {
   EXPECT_EQ(avx2, baseline);
 }
 
+// Undo restores an earlier state into the same air; a session loads into a fresh one. Either
+// way the wind the air gives (velocityAt) is the restored air's at once, not the air's before.
+TEST(SphAir, RestoredAirGivesItsOwnVelocityAtOnce) {
+  const Tunnel tunnel = windTunnel();
+  SphAir air = streamingAir(tunnel, 3.0f);
+  for (int frame = 0; frame < 4; ++frame) air.step(*tunnel.env, nullptr);
+  ArchiveWriter saved;
+  air.saveState(saved);
+  std::vector<Vec3> probes, before;
+  for (int i = 0; i < 20; ++i) probes.push_back(Vec3(-0.5f + 0.07f * float(i), 0.3f + 0.01f * float(i), 0.05f));
+  for (const Vec3& p : probes) before.push_back(air.velocityAt(p));
+  for (int frame = 0; frame < 8; ++frame) air.step(*tunnel.env, nullptr);  // the air moves on
+
+  ArchiveReader undo(saved.data(), "undo");
+  air.loadState(undo);
+  SphAir fresh(tunnel.settings);
+  ArchiveReader load(saved.data(), "session");
+  fresh.loadState(load);
+  int moving = 0;
+  for (size_t i = 0; i < probes.size(); ++i) {
+    EXPECT_EQ(air.velocityAt(probes[i]), before[i]) << "probe " << i;
+    EXPECT_EQ(fresh.velocityAt(probes[i]), before[i]) << "probe " << i;
+    moving += before[i].x() > 1.0f;
+  }
+  EXPECT_GT(moving, 10) << "the probes lie in the stream";
+}
+
 TEST(SphNeighbourSearch, ARowsCellSpanHoldsEveryPointWithinItsHalfWidth) {
   // Against a brute-force reference: points across x ± w — its ends nudged one float inward,
   // points on and beside the cell boundaries in reach, random ones — binned as the grid bins

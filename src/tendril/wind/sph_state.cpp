@@ -40,6 +40,7 @@ void SphAir::loadState(ArchiveReader& in) {
     in.fail("the saved air's particle arrays differ in length");
   if (n > settings_.maxParticles)
     in.fail(fmt::format("the saved air has {} particles, more than its limit {}", n, settings_.maxParticles));
+  buildGrid();  // velocityAt samples the restored air, not the grid of the air before
 }
 
 }  // namespace tendril::wind
