@@ -71,23 +71,25 @@ inline V4f sqrt4(V4f v) {
 #else
 #define TENDRIL_SPH_AVX2 0
 #endif
-// The eight-lane helpers are inlined into both versions; GCC's note that passing them by value
-// would differ between the two ABIs does not apply.
+// The eight-lane helpers are always inlined (at -O0 too), so no call passes an eight-lane vector
+// between the AVX2 versions and baseline code, whose ABIs for it differ; GCC's note about that
+// does not apply.
 #pragma GCC diagnostic ignored "-Wpsabi"
+#define TENDRIL_INLINE8 [[gnu::always_inline]] inline
 
 // Eight floats or ints: one AVX register where the target has AVX, two SSE registers
 // otherwise (the same operations in the same order, so the same results either way).
 using V8f = float __attribute__((vector_size(32)));
 using V8i = int32_t __attribute__((vector_size(32)));
 constexpr V8i kLanes8 = {0, 1, 2, 3, 4, 5, 6, 7};
-inline V8f splat8(float v) { return V8f{v, v, v, v, v, v, v, v}; }
-inline V8f join(V4f lo, V4f hi) { return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7); }
-inline V4f lowHalf(V8f v) { return __builtin_shufflevector(v, v, 0, 1, 2, 3); }
-inline V4f highHalf(V8f v) { return __builtin_shufflevector(v, v, 4, 5, 6, 7); }
-inline V4i lowHalf(V8i v) { return __builtin_shufflevector(v, v, 0, 1, 2, 3); }
-inline V4i highHalf(V8i v) { return __builtin_shufflevector(v, v, 4, 5, 6, 7); }
-inline V8f masked8(V8i mask, V8f v) { return (V8f)(mask & (V8i)v); }
-inline V8f load8(const float* p) {
+TENDRIL_INLINE8 V8f splat8(float v) { return V8f{v, v, v, v, v, v, v, v}; }
+TENDRIL_INLINE8 V8f join(V4f lo, V4f hi) { return __builtin_shufflevector(lo, hi, 0, 1, 2, 3, 4, 5, 6, 7); }
+TENDRIL_INLINE8 V4f lowHalf(V8f v) { return __builtin_shufflevector(v, v, 0, 1, 2, 3); }
+TENDRIL_INLINE8 V4f highHalf(V8f v) { return __builtin_shufflevector(v, v, 4, 5, 6, 7); }
+TENDRIL_INLINE8 V4i lowHalf(V8i v) { return __builtin_shufflevector(v, v, 0, 1, 2, 3); }
+TENDRIL_INLINE8 V4i highHalf(V8i v) { return __builtin_shufflevector(v, v, 4, 5, 6, 7); }
+TENDRIL_INLINE8 V8f masked8(V8i mask, V8f v) { return (V8f)(mask & (V8i)v); }
+TENDRIL_INLINE8 V8f load8(const float* p) {
   V8f v;
   std::memcpy(&v, p, sizeof v);
   return v;
@@ -95,7 +97,7 @@ inline V8f load8(const float* p) {
 // Rows base[j[0]], …, base[j[7]] (four floats each) to four columns of eight: column c, lane l
 // = base[j[l]][c]. Rows l and l + 4 share a 128-bit half, so the transpose stays within halves
 // (AVX's in-lane unpacks and shuffles).
-inline void transpose8(const V4f* base, const uint32_t* j, V8f* x, V8f* y, V8f* z, V8f* w) {
+TENDRIL_INLINE8 void transpose8(const V4f* base, const uint32_t* j, V8f* x, V8f* y, V8f* z, V8f* w) {
   const V8f a = join(base[j[0]], base[j[4]]), b = join(base[j[1]], base[j[5]]);
   const V8f c = join(base[j[2]], base[j[6]]), d = join(base[j[3]], base[j[7]]);
   const V8f t0 = __builtin_shufflevector(a, b, 0, 8, 1, 9, 4, 12, 5, 13);
@@ -107,9 +109,9 @@ inline void transpose8(const V4f* base, const uint32_t* j, V8f* x, V8f* y, V8f* 
   *z = __builtin_shufflevector(t2, t3, 0, 1, 8, 9, 4, 5, 12, 13);
   *w = __builtin_shufflevector(t2, t3, 2, 3, 10, 11, 6, 7, 14, 15);
 }
-inline V8f sqrt8(V8f v) { return join(sqrt4(lowHalf(v)), sqrt4(highHalf(v))); }
+TENDRIL_INLINE8 V8f sqrt8(V8f v) { return join(sqrt4(lowHalf(v)), sqrt4(highHalf(v))); }
 // The sum of the eight lanes in a fixed order.
-inline float total8(V8f v) {
+TENDRIL_INLINE8 float total8(V8f v) {
   const V4f s = lowHalf(v) + highHalf(v);
   return (s[0] + s[1]) + (s[2] + s[3]);
 }
@@ -123,7 +125,7 @@ inline unsigned movemask(V4i m) {
 #endif
 }
 
-inline unsigned movemask8(V8i m) { return movemask(lowHalf(m)) | (movemask(highHalf(m)) << 4); }
+TENDRIL_INLINE8 unsigned movemask8(V8i m) { return movemask(lowHalf(m)) | (movemask(highHalf(m)) << 4); }
 
 // Per 4-bit mask: the numbers of its set lanes, first to last (the rest 0), and how many.
 struct LaneTable {
