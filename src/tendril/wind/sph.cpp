@@ -733,7 +733,7 @@ void SphAir::regrid() {
   std::swap(g.rho, g.rho2), std::swap(g.sdf, g.sdf2), std::swap(g.budget, g.budget2);
   std::swap(g.sdfNormal, g.sdfNormal2), std::swap(g.order, g.order2);
   g.pressure.resize(live + 8);
-  for (auto* a : {&g.dragRate}) a->resize(live);
+  g.dragRate.resize(live);
   g.acc.resize(live), g.dragAcc.resize(live);
 }
 
