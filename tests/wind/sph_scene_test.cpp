@@ -50,7 +50,19 @@ TEST(SphScene, SettingsAreChecked) {
             std::string::npos);
   EXPECT_NE(message(R"({"mode": "windy"})").find("/environment/wind/mode"), std::string::npos);
   EXPECT_NE(message(R"({"velocity": [1, 0, 0], "gust": 1})").find("gust"), std::string::npos);
+  EXPECT_NE(message(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1], "boundary": {"+w": "closed"}}})")
+                .find("/environment/wind/sph/boundary"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1], "boundary": {"+x": "shut"}}})")
+                .find("/environment/wind/sph/boundary/+x"),
+            std::string::npos);
   EXPECT_NO_THROW(parse(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1], "boundary": "closed"}})"));
+  // A wind tunnel: every face closed but the outlet.
+  scene::Scene tunnel = parse(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1],
+      "boundary": {"-x": "closed", "-y": "closed", "+y": "closed", "-z": "closed", "+z": "closed"}}})");
+  for (int f = 0; f < 6; ++f) EXPECT_EQ(tunnel.sph.closed(f), f != 1) << f;
+  EXPECT_TRUE(parse(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1], "boundary": "closed"}})")
+                  .sph.allClosed());
 }
 
 }  // namespace

@@ -108,8 +108,17 @@ wind::SphSettings readSph(JsonObject& o, bool* fill) {
   s.restDensity = o.numberf("rest_density", s.restDensity, 1.2, 1.4);
   s.viscosity = o.numberf("viscosity", s.viscosity, 0.0, 10.0);
   s.soundSpeed = o.numberf("sound_speed", s.soundSpeed, 0.1, 1000.0);
-  std::string boundary = o.choice("boundary", "outflow", {"outflow", "closed"});
-  s.boundary = boundary == "closed" ? wind::SphBoundary::Closed : wind::SphBoundary::Outflow;
+  // "boundary": one kind for every face, or an object naming faces ("-x" … "+z"; the others
+  // outflow).
+  auto kind = [](const std::string& k) { return k == "closed" ? wind::SphBoundary::Closed : wind::SphBoundary::Outflow; };
+  if (const Json* b = o.has("boundary") ? &o.json().at("boundary") : nullptr; b && b->is_object()) {
+    JsonObject faces = o.object("boundary");
+    static const char* kFaces[6] = {"-x", "+x", "-y", "+y", "-z", "+z"};
+    for (int f = 0; f < 6; ++f) s.faces[size_t(f)] = kind(faces.choice(kFaces[f], "outflow", {"outflow", "closed"}));
+    faces.finish();
+  } else {
+    s.setBoundary(kind(o.choice("boundary", "outflow", {"outflow", "closed"})));
+  }
   s.maxParticles = size_t(o.integer("max_particles", int64_t(s.maxParticles), 1, 100'000'000));
   *fill = o.boolean("fill", true);
   o.finish();

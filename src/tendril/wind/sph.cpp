@@ -600,8 +600,8 @@ size_t SphAir::fill(const Vec3& min, const Vec3& max, const env::Environment* en
 
 float SphAir::backgroundPressure() const {
   // An open face has no ambient air outside it: a background pressure would blow the air out
-  // through it (and speed a stream up by √(2 p_b/ρ0)), so open domains use none.
-  if (settings_.boundary != SphBoundary::Closed) return 0.0f;
+  // through it (and speed a stream up by √(2 p_b/ρ0)), so only sealed boxes use one.
+  if (!settings_.allClosed()) return 0.0f;
   return settings_.backgroundPressure * settings_.soundSpeed * settings_.soundSpeed * settings_.restDensity;
 }
 
@@ -859,8 +859,10 @@ struct PassConstants {
   size_t n = 0;
   float h = 0, h2 = 0, invH2 = 0, m = 0, rho0 = 0, c2 = 0, background = 0, norm6 = 0, search = 0;
   float kp = 0, kv = 0;  // the pressure and viscosity forces' folded constants
-  bool closed = false, hasPlants = false;
+  bool closed = false, hasPlants = false;  // closed: any face of the domain box is a wall
   Vec3 dmin = Vec3::Zero(), dmax = Vec3::Zero();
+  // The closed faces' planes; ∓∞ for open ones, so their mirrored lattices add nothing.
+  Vec3 wallMin = Vec3::Zero(), wallMax = Vec3::Zero();
 };
 
 // Room for `more` entries after `used` in a block's buffer.
@@ -899,7 +901,7 @@ template <class Grid, class Walls>
     g.nbrCount[k] = uint32_t(used - g.nbrBegin[k]);
     float rho = c.m * c.norm6 * total8(sum8);
     rho += W.lookup(W.density, g.sdf[k]);
-    if (c.closed) rho += boxGhostDensity(W, Vec3(x, y, z) - c.dmin, c.dmax - Vec3(x, y, z));  // walls
+    if (c.closed) rho += boxGhostDensity(W, Vec3(x, y, z) - c.wallMin, c.wallMax - Vec3(x, y, z));  // walls
     g.rho[k] = rho;
   }
 }
@@ -1020,7 +1022,7 @@ template <class Grid, class Walls>
     Vec3 a = Vec3(total8(ax8), total8(ay8), total8(az8)) / rho;
     // Walls: a = −p/(ρ0 ρ) g_w(d) n.
     const float wall = -pk / (c.rho0 * rho);
-    if (c.closed) a += wall * boxGhostGradient(W, Vec3(x, y, z) - c.dmin, c.dmax - Vec3(x, y, z));
+    if (c.closed) a += wall * boxGhostGradient(W, Vec3(x, y, z) - c.wallMin, c.wallMax - Vec3(x, y, z));
     if (pk > 0.0f && g.sdf[k] < h) a += wall * W.lookup(W.gradient, g.sdf[k]) * g.sdfNormal[k];
     if (c.hasPlants) a += g.plantAcc[k];  // the plants' pressure push, from the plant pass
     g.acc[k] = a;
@@ -1174,10 +1176,15 @@ void SphAir::substep(const env::Environment& env, float dt) {
   c.search = h * (1.0f + 1e-5f);
   c.kp = 0.5f * m * (kSpiky / (h * h * h * h)) / (h * h);
   c.kv = settings_.viscosity * m * (kVisc / (h * h * h * h * h)) / h;
-  c.closed = settings_.boundary == SphBoundary::Closed, c.hasPlants = P.size() > 0;
+  c.hasPlants = P.size() > 0;
   c.dmin = settings_.domainMin, c.dmax = settings_.domainMax;
+  for (int k = 0; k < 3; ++k) {
+    c.wallMin[k] = settings_.closed(2 * k) ? c.dmin[k] : -kInf;
+    c.wallMax[k] = settings_.closed(2 * k + 1) ? c.dmax[k] : kInf;
+    c.closed = c.closed || settings_.closed(2 * k) || settings_.closed(2 * k + 1);
+  }
   const bool closed = c.closed, hasPlants = c.hasPlants;
-  const Vec3 dmin = c.dmin, dmax = c.dmax;
+  const Vec3 dmin = c.dmin, dmax = c.dmax, wallMin = c.wallMin, wallMax = c.wallMax;
   g.nbrBlocks.resize(blocks);
   g.nbrBegin.resize(n), g.nbrCount.resize(n), g.hitCount.resize(n);
   g.invRho.resize(n), g.pOverRho.resize(n), g.packedX.resize(n), g.packedV.resize(n), g.plantAcc.resize(n);
@@ -1232,12 +1239,14 @@ void SphAir::substep(const env::Environment& env, float dt) {
       const Vec3 x0(g.px[k], g.py[k], g.pz[k]);
       Vec3 x = x0 + dt * v;
       bool dead = false;
+      // Closed faces hold the particle s/4 inside; past an open one it is gone.
       if (closed) {
         for (int c = 0; c < 3; ++c) {
-          if (x[c] < dmin[c] + rmin) x[c] = dmin[c] + rmin, v[c] = std::max(v[c], 0.0f);
-          if (x[c] > dmax[c] - rmin) x[c] = dmax[c] - rmin, v[c] = std::min(v[c], 0.0f);
+          if (x[c] < wallMin[c] + rmin) x[c] = wallMin[c] + rmin, v[c] = std::max(v[c], 0.0f);
+          if (x[c] > wallMax[c] - rmin) x[c] = wallMax[c] - rmin, v[c] = std::min(v[c], 0.0f);
         }
-      } else if ((x.array() < dmin.array()).any() || (x.array() > dmax.array()).any()) {
+      }
+      if ((x.array() < dmin.array()).any() || (x.array() > dmax.array()).any()) {
         dead = true;
         dead_[g.order[k]] = 1;
       }

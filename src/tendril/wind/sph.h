@@ -8,8 +8,8 @@
 // (eq. 13, after Owen et al. 1997): they add to the air's density and push it by pressure
 // like boundary particles, and they drag the air with a stem's cross-flow drag; the equal and
 // opposite force becomes the plant particle's external acceleration a_e in eq. 1.
-// Obstacles come from the Environment's signed distances; the domain box is either closed
-// (walls) or open (particles leaving it are removed).
+// Obstacles come from the Environment's signed distances; each face of the domain box is
+// either closed (a wall) or open (particles leaving through it are removed).
 //
 // Determinism: every sum is gathered per particle in grid order, with no atomics; particles
 // are spawned and removed sequentially. Results are bit-identical for any thread count.
@@ -20,6 +20,7 @@
 #include "tendril/core/math.h"
 #include "tendril/env/wind_field.h"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -52,7 +53,19 @@ struct SphSettings {
   int maxSubsteps = 64;           // per frame; more would be needed → the frame is clamped, warned once
   Vec3 domainMin = Vec3(-1, 0, -1);  // the simulated box (m)
   Vec3 domainMax = Vec3(1, 2, 1);
-  SphBoundary boundary = SphBoundary::Outflow;
+  // The domain box's faces: faces[2k] lies at domainMin[k], faces[2k + 1] at domainMax[k]
+  // (k = 0, 1, 2 for x, y, z). All Outflow (the default): air that leaves is gone. All Closed:
+  // a sealed box, with the background pressure. Mixed: a wind tunnel, say, closed but for its
+  // outlet (no background pressure: an open face has no air outside to balance it).
+  std::array<SphBoundary, 6> faces = {SphBoundary::Outflow, SphBoundary::Outflow, SphBoundary::Outflow,
+                                      SphBoundary::Outflow, SphBoundary::Outflow, SphBoundary::Outflow};
+  void setBoundary(SphBoundary b) { faces.fill(b); }
+  bool closed(int face) const { return faces[size_t(face)] == SphBoundary::Closed; }
+  bool allClosed() const {
+    for (int f = 0; f < 6; ++f)
+      if (!closed(f)) return false;
+    return true;
+  }
   size_t maxParticles = 1'000'000;  // emitters stop (warned once) at this many air particles
 };
 
