@@ -35,6 +35,7 @@ struct RenderOptions {
   double fov = 40.0;
   int samples = 4;
   bool noShadows = false;
+  bool air = false;
   CommonOptions common;
 };
 
@@ -71,6 +72,8 @@ int runRender(const RenderOptions& o) {
     owned = std::make_unique<session::Session>(std::move(scene));
   }
   session::Session& session = *owned;
+  if (o.air && !session.air())
+    throw Error(o.scene, "--air", "the scene has no simulated air (its wind mode is not \"sph\")");
   {
     Progress progress("growing", uint64_t(steps), !o.common.quiet);
     session.run(steps, [&](uint32_t done) {
@@ -80,7 +83,7 @@ int runRender(const RenderOptions& o) {
   }
   double growSeconds = total.seconds();
 
-  render::SessionScene view(session);
+  render::SessionScene view(session, o.air);
   const float aspect = float(o.width) / float(o.height);
   render::Camera camera = render::frameBounds(render::focusBounds(view.scene()), render::kDefaultViewDirection, aspect,
                                               radians(float(o.fov)));
@@ -128,6 +131,7 @@ RegisterCommand registerRender("render", "Grow every plant of a scene and render
   sub.add_option("--samples", o->samples, "Multisample anti-aliasing samples (1 = off)")->check(CLI::Range(1, 64))
       ->capture_default_str();
   sub.add_flag("--no-shadows", o->noShadows, "Render without the shadow map");
+  sub.add_flag("--air", o->air, "Also draw the simulated air (wind mode \"sph\") as streaks coloured by speed");
   addCommonOptions(sub, o->common);
   return [o] { return runRender(*o); };
 });

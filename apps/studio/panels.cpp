@@ -520,7 +520,12 @@ void Studio::Impl::drawWindPanel() {
   ImGui::Text("mode %s, prevailing %.2f, %.2f, %.2f m/s", modes[mode], w.velocity.x(), w.velocity.y(), w.velocity.z());
   ImGui::Text("%zu emitter(s)", w.emitters.size());
   ImGui::Text("gusts: strength %.2f, period %.1f s, scale %.1f m", w.gustStrength, w.gustPeriod, w.gustScale);
-  if (const wind::SphAir* air = session->air()) ImGui::Text("simulated air: %zu particles", air->count());
+  if (const wind::SphAir* air = session->air()) {
+    ImGui::Text("simulated air: %zu particles", air->count());
+    ImGui::Checkbox("show the air", &showAir);
+    ImGui::SameLine();
+    ImGui::TextDisabled("(streaks: blue still, green the scene's wind, red twice it)");
+  }
   ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
   ImGui::TextWrapped("Emitters are added with the wind emitter tool and edited in their panel; the prevailing "
                      "wind comes from the scene file.");

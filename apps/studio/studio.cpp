@@ -593,7 +593,7 @@ int Studio::Impl::run() {
       meshesChanged = true;
       obstacleRevision = session->obstacleRevision();
     }
-    view.update(*session, selection, meshesChanged);
+    view.update(*session, selection, meshesChanged, showAir);
     meshesChanged = false;
     updateStress();
     view.applyStress();

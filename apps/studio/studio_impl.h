@@ -109,6 +109,7 @@ struct Studio::Impl {
   std::optional<uint32_t> dragPlant;  // the plant of the drag under way (interactive or scripted)
   std::unordered_map<uint32_t, float> strainAtDragStart;  // particle id → strain when it began
   bool playing = true;
+  bool showAir = true;  // the simulated air's streaks (wind mode sph)
   int speed = 1;
   bool meshesChanged = true;
   uint64_t obstacleRevision = 0;  // the session's when the viewport last fetched obstacle meshes

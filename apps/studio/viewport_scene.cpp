@@ -1,6 +1,7 @@
 #include "viewport_scene.h"
 
 #include "tendril/core/timer.h"
+#include "tendril/render/session_render.h"
 
 namespace tendril::studio {
 namespace {
@@ -32,7 +33,8 @@ void ViewportScene::applyStress() {
                                                                           : std::span<const float>();
 }
 
-void ViewportScene::update(const session::Session& session, const Selection& selection, bool meshesChanged) {
+void ViewportScene::update(const session::Session& session, const Selection& selection, bool meshesChanged,
+                           bool air) {
   const env::Environment& env = session.environment();
   Timer timer;
   plants_ = session.plants();
@@ -70,6 +72,7 @@ void ViewportScene::update(const session::Session& session, const Selection& sel
   }
   scene_.lights = env.lights();
   scene_.strokes = env.strokes();
+  if (air) scene_.air = render::airView(session);
   for (const env::WindEmitter& e : env.windField().settings().emitters) {
     render::GizmoLine line;
     line.start = e.position;

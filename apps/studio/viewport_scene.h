@@ -1,6 +1,6 @@
 // The RenderScene the viewport draws, rebuilt from the Session every frame: plant snapshots
 // (they change every step), obstacles at their current transforms (meshes kept until the
-// obstacles change), lights, strokes, wind emitters and the selection. Unlike
+// obstacles change), lights, strokes, wind emitters, the simulated air and the selection. Unlike
 // render::SessionScene it keeps obstacle meshes across frames, so a frame costs the plant
 // snapshots and nothing else.
 #pragma once
@@ -26,7 +26,8 @@ class ViewportScene {
  public:
   // Rebuilds the scene from the session. `meshesChanged` forces the obstacle meshes to be
   // fetched again (an obstacle was added, imported or rescaled).
-  void update(const session::Session& session, const Selection& selection, bool meshesChanged);
+  // With `air`, the session's simulated air too (render::airView).
+  void update(const session::Session& session, const Selection& selection, bool meshesChanged, bool air = false);
   // Per-node stress in [0, 1] for a plant (empty = bark colours); applyStress hands the
   // current values to the scene's plant views.
   void setStress(uint32_t plant, std::vector<float> stress);

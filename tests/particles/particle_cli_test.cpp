@@ -23,7 +23,7 @@ TEST(ParticleCli, TheFigureScenesAreValid) {
     auto r = test::runTendril("validate " + quoted(e.path()), dir);
     EXPECT_EQ(r.exitCode, 0) << e.path() << ": " << r.err;
   }
-  EXPECT_EQ(scenes, 6);
+  EXPECT_EQ(scenes, 7);
 }
 
 TEST(ParticleCli, GrowWritesTheEndAndANumberedSequence) {

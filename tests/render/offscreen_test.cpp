@@ -407,5 +407,38 @@ TEST(RenderOffscreen, StrokesAndGizmosAreDrawn) {
   EXPECT_LT(line[2], 120) << "yellow line";
 }
 
+TEST(RenderOffscreen, AirStreaksShowTheirSpeedAlongTheirVelocity) {
+  // Three rows of air particles in front of the background: still, at half the scale's top
+  // and at its top, moving along +x. Streaks are blue, green and red, and lie along x only.
+  auto r = makeRenderer();
+  ASSERT_TRUE(r);
+  TestScene t(false, false);
+  const float speeds[3] = {0.0f, 2.0f, 4.0f}, heights[3] = {0.3f, 0.8f, 1.3f};
+  for (int row = 0; row < 3; ++row)
+    for (int k = 0; k < 9; ++k) {
+      t.scene.air.positions.push_back(Vec3(-0.4f + 0.1f * float(k), heights[row], 0.0f));
+      t.scene.air.velocities.push_back(Vec3(speeds[row], 0.0f, 0.0f));
+    }
+  t.scene.air.maxSpeed = 4.0f;
+  t.scene.air.streakSeconds = 0.025f;  // 10 cm at the top speed: the row is one line
+  t.scene.air.minLength = 0.02f;
+  RenderSettings s = testSettings();
+  s.lineWidth = 4.0f;
+  io::Image img = r->render(t.scene, t.camera, s);
+  auto dominant = [&](const Vec3& p) {
+    auto [x, y] = pixelOf(t.camera, p);
+    const uint8_t* c = img.pixel(x, y);
+    return c[0] > c[1] + 40 && c[0] > c[2] + 40 ? 0 : c[1] > c[0] + 40 && c[1] > c[2] + 40 ? 1
+                                                      : c[2] > c[0] + 40 && c[2] > c[1] + 40 ? 2 : -1;
+  };
+  EXPECT_EQ(dominant(Vec3(0.0f, 0.3f, 0.0f)), 2) << "still air is blue";
+  EXPECT_EQ(dominant(Vec3(0.0f, 0.8f, 0.0f)), 1) << "half the top speed is green";
+  EXPECT_EQ(dominant(Vec3(0.0f, 1.3f, 0.0f)), 0) << "the top speed is red";
+  EXPECT_EQ(dominant(Vec3(0.04f, 1.3f, 0.0f)), 0) << "and 10 cm long";
+  EXPECT_EQ(dominant(Vec3(0.05f, 0.8f, 0.0f)), -1) << "half as long at half the speed";
+  EXPECT_EQ(dominant(Vec3(0.05f, 1.4f, 0.0f)), -1) << "streaks run along the velocity only";
+  EXPECT_EQ(dominant(Vec3(0.05f, 0.3f, 0.0f)), -1) << "still air is a short tick";
+}
+
 }  // namespace
 }  // namespace tendril::render

@@ -64,6 +64,35 @@ TEST(RenderCli, BadArgumentsAreCommandLineErrors) {
   EXPECT_FALSE(fs::exists(dir / "x.png"));
 }
 
+TEST(RenderCli, AirIsDrawnOnlyWhereThereIsAny) {
+  fs::path dir = test::scratchDir();
+  fs::path wind = test::sourceDir() / "examples/scenes/particles-fig07-wind.json";
+  fs::path still = test::sourceDir() / "examples/scenes/default.json";
+  fs::path plain = dir / "plain.png", air = dir / "air.png";
+  std::string err;
+  const std::string size = " --steps 4 --width 320 --height 180 -q";
+  ASSERT_EQ(runCli(dir, "render '" + wind.string() + "' -o '" + plain.string() + "'" + size, &err), 0) << err;
+  ASSERT_EQ(runCli(dir, "render '" + wind.string() + "' -o '" + air.string() + "' --air" + size, &err), 0) << err;
+  // The streaks of the air that fills the tunnel: mostly green (the scene's 3 m/s wind).
+  io::Image a = io::readImage(plain), b = io::readImage(air);
+  int changed = 0, green = 0;
+  for (int y = 0; y < b.height; ++y)
+    for (int x = 0; x < b.width; ++x) {
+      const uint8_t* p = a.pixel(x, y);
+      const uint8_t* q = b.pixel(x, y);
+      if (std::max({std::abs(p[0] - q[0]), std::abs(p[1] - q[1]), std::abs(p[2] - q[2])}) < 24) continue;
+      ++changed;
+      green += q[1] > q[0] && q[1] > q[2];
+    }
+  EXPECT_GT(changed, 320 * 180 / 10) << "the air covers a good part of the image";
+  EXPECT_GT(double(green) / double(changed), 0.5) << green << " green of " << changed << " changed pixels";
+  // A scene without simulated air: an error naming the option, and no image.
+  EXPECT_EQ(runCli(dir, "render '" + still.string() + "' -o '" + (dir / "x.png").string() + "' --air" + size, &err), 2);
+  EXPECT_NE(err.find("--air"), std::string::npos) << err;
+  EXPECT_NE(err.find("no simulated air"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir / "x.png"));
+}
+
 TEST(RenderCli, WithoutOpenGLTheErrorSaysWhatWasTried) {
   // GLVND with no vendor library: no EGL implementation at all.
   fs::path dir = test::scratchDir();

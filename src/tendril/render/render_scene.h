@@ -51,6 +51,16 @@ struct GizmoLine {
   bool arrow = false;
 };
 
+// Simulated air (SPH particles, docs/sph.md) drawn as streaks centred on each particle along
+// its velocity, v·streakSeconds long (at least minLength), coloured by speed from blue (still)
+// through green (maxSpeed / 2) to red (maxSpeed and faster). Not part of the scene's bounds.
+struct AirView {
+  std::vector<Vec3> positions, velocities;
+  float streakSeconds = 0.04f;  // s
+  float minLength = 0.01f;      // m; still air along +y
+  float maxSpeed = 5.0f;        // m/s
+};
+
 struct GroundGrid {
   bool enabled = false;
   float height = 0.0f;   // y of the grid plane (m)
@@ -69,6 +79,7 @@ struct RenderScene {
   std::vector<env::Light> lights;
   std::vector<env::Stroke> strokes;  // painted points: attract green-ish, repel red-ish
   std::vector<GizmoLine> gizmos;
+  AirView air;
   Vec3 background = Vec3(0.62f, 0.72f, 0.84f);
   GroundGrid grid;
   // The part of the scene that matters (plants and their supports, say): the shadow map is

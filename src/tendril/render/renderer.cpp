@@ -20,6 +20,13 @@
 namespace tendril::render {
 namespace {
 
+// Air speed on a scale of 0–1: blue (still), green (mid-scale), red (1 and faster).
+Vec3 airColor(float t) {
+  t = std::clamp(t, 0.0f, 1.0f);
+  const Vec3 blue(0.05f, 0.2f, 0.9f), green(0.1f, 0.75f, 0.15f), red(0.9f, 0.08f, 0.04f);
+  return t < 0.5f ? Vec3((1.0f - 2.0f * t) * blue + 2.0f * t * green) : Vec3((2.0f - 2.0f * t) * green + (2.0f * t - 1.0f) * red);
+}
+
 constexpr int kMaxLights = 8;         // matches kMaxLights in shaders::kLighting
 constexpr int kLeafRows = 4;          // quads along a blade: enough for the bend to read as a curve
 constexpr float kLeafCup = 0.18f;     // blade edges rise by this fraction of the half width
@@ -610,6 +617,15 @@ void Renderer::render(const RenderScene& scene, const Camera& camera, const Rend
     float head = std::min(0.25f * len, 0.15f);
     addLine(l.end, l.end - head * d + 0.5f * head * side, l.color);
     addLine(l.end, l.end - head * d - 0.5f * head * side, l.color);
+  }
+  const AirView& air = scene.air;
+  const float speedScale = air.maxSpeed > 0.0f ? 1.0f / air.maxSpeed : 0.0f;
+  for (size_t i = 0; i < air.positions.size() && i < air.velocities.size(); ++i) {
+    const Vec3& v = air.velocities[i];
+    const float speed = v.norm();
+    const Vec3 along = speed > 0.0f ? Vec3(v / speed) : Vec3::UnitY();
+    const Vec3 half = 0.5f * std::max(speed * air.streakSeconds, air.minLength) * along;
+    addLine(air.positions[i] - half, air.positions[i] + half, airColor(speed * speedScale));
   }
   m.capData.clear();
   for (const BranchInstance& b : m.branchData)

@@ -2,10 +2,31 @@
 
 #include "tendril/io/atomic_file.h"
 #include "tendril/render/offscreen.h"
+#include "tendril/wind/sph.h"
+
+#include <algorithm>
 
 namespace tendril::render {
 
-SessionScene::SessionScene(const session::Session& session) : plants_(session.plants()) {
+AirView airView(const session::Session& session) {
+  AirView view;
+  const wind::SphAir* air = session.air();
+  if (!air) return view;
+  view.positions = air->positions();
+  view.velocities = air->velocities();
+  // The scene's wind mid-scale (green), the air it speeds up toward red, its lees blue; at the
+  // scene's wind a streak is 3/4 of the particle spacing long.
+  const env::WindSettings& w = session.environment().windField().settings();
+  float wind = std::max(0.5f, w.velocity.norm());
+  for (const env::WindEmitter& e : w.emitters) wind = std::max(wind, e.speed);
+  const float spacing = air->settings().spacing;
+  view.maxSpeed = 2.0f * wind;
+  view.streakSeconds = 0.75f * spacing / wind;
+  view.minLength = 0.2f * spacing;
+  return view;
+}
+
+SessionScene::SessionScene(const session::Session& session, bool air) : plants_(session.plants()) {
   const env::Environment& env = session.environment();
   const std::string source = session.scene().path.empty() ? std::string("session") : session.scene().path.string();
   meshes_.reserve(env.obstacleCount());
@@ -28,6 +49,7 @@ SessionScene::SessionScene(const session::Session& session) : plants_(session.pl
   }
   scene_.lights = env.lights();
   scene_.strokes = env.strokes();
+  if (air) scene_.air = airView(session);
   RenderScene plantsOnly;
   plantsOnly.plants = scene_.plants;
   Bounds3 plantBounds = sceneBounds(plantsOnly);

@@ -18,7 +18,8 @@ namespace tendril::render {
 // so the default camera and the shadow map frame what grows rather than the whole ground.
 class SessionScene {
  public:
-  explicit SessionScene(const session::Session& session);
+  // With `air`, the session's simulated air too (airView).
+  explicit SessionScene(const session::Session& session, bool air = false);
   SessionScene(const SessionScene&) = delete;
   SessionScene& operator=(const SessionScene&) = delete;
 
@@ -32,6 +33,11 @@ class SessionScene {
   std::vector<TriangleMesh> meshes_;
   RenderScene scene_;
 };
+
+// The session's simulated air (wind mode "sph") as streaks: the fastest wind the scene sets
+// (prevailing or emitter) is mid-scale and draws streaks 3/4 of the air's spacing long. Empty
+// without air.
+AirView airView(const session::Session& session);
 
 // Renders the session at settings.width × settings.height, from `camera` or by default from
 // defaultCamera(). Creates (and ends) its own offscreen OpenGL context; throws Error when none
