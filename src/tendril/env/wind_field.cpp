@@ -13,9 +13,19 @@ bool WindSettings::calm() const {
   return true;
 }
 
+// The noise's value at lattice point (i, j): one mix of the seed and both coordinates, each
+// scaled by its own odd constant (the mix's avalanche spreads every input bit).
 static float lattice(int64_t i, int64_t j, uint64_t seed) {
-  uint64_t h = mix64(seed ^ mix64(uint64_t(i) * 0x9e3779b97f4a7c15ull ^ mix64(uint64_t(j) + 0x632be59bd9b4e019ull)));
+  uint64_t h = mix64(seed ^ (uint64_t(i) * 0x9e3779b97f4a7c15ull) ^ (uint64_t(j) * 0xc2b2ae3d27d4eb4full));
   return float(h >> 40) * (2.0f / 16777216.0f) - 1.0f;
+}
+
+void WindField::prepare() {
+  speed_ = settings_.velocity.norm();
+  dir_ = speed_ > 0.0f ? Vec3(settings_.velocity / speed_) : Vec3::UnitX();
+  const Vec3 across = dir_.cross(Vec3::UnitY());
+  acrossIsX_ = !(across.squaredNorm() > 1e-8f);
+  across_ = acrossIsX_ ? Vec3::UnitX() : across.normalized();
 }
 
 static float quintic(float t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); }
@@ -32,18 +42,29 @@ float WindField::noise(float u, float v, uint64_t seed) {
 Vec3 WindField::ambient(const Vec3& p, float t) const {
   const WindSettings& s = settings_;
   if (s.mode != WindMode::Gusty) return s.velocity;
-  float speed = s.velocity.norm();
+  const float speed = speed_;
   if (speed <= 0.0f) return s.velocity;
-  Vec3 dir = s.velocity / speed;
+  const Vec3& dir = dir_;
   // Gust fronts travel downwind with the wind: the noise sees the time a parcel of air left a
   // plane through the origin, and the position across the wind.
-  Vec3 across = dir.cross(Vec3::UnitY());
-  float acrossDist = across.squaredNorm() > 1e-8f ? p.dot(across.normalized()) : p.x();
+  float acrossDist = acrossIsX_ ? p.x() : p.dot(across_);
   float tau = (t - p.dot(dir) / speed) / s.gustPeriod;
   float sigma = acrossDist / s.gustScale;
   float gust = noise(tau, sigma, s.seed);
   float turn = noise(tau + 101.3f, sigma + 57.1f, s.seed ^ 0x5bd1e995ull);
-  Vec3 turned = Eigen::AngleAxisf(s.gustTurn * turn, Vec3::UnitY()) * dir;
+  // dir turned by θ about +Y: (x cos θ + z sin θ, y, z cos θ − x sin θ); θ is at most
+  // gustTurn, mostly a few degrees, where short series give sine and cosine to float precision.
+  const float theta = s.gustTurn * turn;
+  float c, sn;
+  if (std::fabs(theta) < 0.5f) {
+    const float t2 = theta * theta;
+    sn = theta * (1.0f + t2 * (-1.0f / 6.0f + t2 * (1.0f / 120.0f + t2 * (-1.0f / 5040.0f))));
+    c = 1.0f + t2 * (-0.5f + t2 * (1.0f / 24.0f + t2 * (-1.0f / 720.0f + t2 * (1.0f / 40320.0f))));
+  } else {
+    sn = std::sin(theta);
+    c = std::cos(theta);
+  }
+  const Vec3 turned(dir.x() * c + dir.z() * sn, dir.y(), dir.z() * c - dir.x() * sn);
   return speed * std::max(0.0f, 1.0f + s.gustStrength * gust) * turned;
 }
 

@@ -61,10 +61,13 @@ class AirFlow {
 class WindField {
  public:
   WindField() = default;
-  explicit WindField(WindSettings settings) : settings_(std::move(settings)) {}
+  explicit WindField(WindSettings settings) : settings_(std::move(settings)) { prepare(); }
 
   const WindSettings& settings() const { return settings_; }
-  void setSettings(WindSettings settings) { settings_ = std::move(settings); }
+  void setSettings(WindSettings settings) {
+    settings_ = std::move(settings);
+    prepare();
+  }
   // The simulated air for sph mode (not owned; null = none).
   void setAirFlow(const AirFlow* air) { air_ = air; }
 
@@ -77,8 +80,14 @@ class WindField {
   static float noise(float u, float v, uint64_t seed);
 
  private:
+  void prepare();  // the frame below, from settings_
+
   WindSettings settings_;
   const AirFlow* air_ = nullptr;
+  // The prevailing wind's speed, direction and the horizontal direction across it (gusty).
+  float speed_ = 0.0f;
+  Vec3 dir_ = Vec3::UnitX(), across_ = Vec3::UnitX();
+  bool acrossIsX_ = true;  // a vertical wind: its "across" position is x
 };
 
 }  // namespace tendril::env

@@ -217,24 +217,24 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
       }
     }
     const Vec3& d = direction_[i];
-    Vec3 wPerp = w - w.dot(d) * d;
-    float leafA = area_[i] - 2.0f * rest_.radius[i] * rest_.length[i];
-    force_[i] = half * (2.0f * rest_.radius[i] * rest_.length[i] * wPerp.norm() * wPerp + leafA * w.norm() * w);
+    const float along = w.dot(d), speed = w.norm();
+    const Vec3 wPerp = w - along * d;
+    const float stemA = 2.0f * rest_.radius[i] * rest_.length[i], leafA = area_[i] - stemA;
+    force_[i] = half * (stemA * wPerp.norm() * wPerp + leafA * speed * w);
     moment_[i] = (centre_[i] - rest_.position[i]).cross(force_[i]);
-    const float speed = w.norm();
     speed_[i] = speed;
     SwayNode& r = nodes_[i];
     r.axis = Vec3::UnitX();
     r.sinToWind = 0.0f;  // below the threshold: does not sway
     r.cosToWind = 1.0f;
     if (!held_[i] && speed > 0.0f) {
-      const Vec3 wHat = w * (1.0f / speed);
-      const Vec3 u = d.cross(wHat);
-      const float s = u.norm();
+      // u = b × ŵ: |b × w| / |w| is the sine of the angle to the wind, b · w / |w| its cosine.
+      const Vec3 u = d.cross(w);
+      const float un = u.norm(), invSpeed = 1.0f / speed, s = un * invSpeed;
       if (s >= 1e-6f) {
-        r.axis = u * (1.0f / s);
+        r.axis = u * (1.0f / un);
         r.sinToWind = s;
-        r.cosToWind = d.dot(wHat);
+        r.cosToWind = along * invSpeed;
       }
     }
   }, 256);
