@@ -165,6 +165,20 @@ TEST(StudioHeadless, ReplaysSeedPaintDragCutAndShowsTheOutcome) {
   }
 }
 
+TEST(StudioHeadless, ShowsTheSimulatedAir) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  // The wind-tunnel example after two steps: its plants are seeds, what fills the viewport is
+  // the air's streaks, green at the scene's 3 m/s.
+  const fs::path scene = kTestDir / "../../../examples/scenes/particles-fig07-wind.json";
+  std::string out, err;
+  ASSERT_EQ(runStudio(dir, quoted(scene) + " --frames 2 --size 1200x700 --screenshot " + quoted(dir / "air.png"), true,
+                      &out, &err),
+            0)
+      << err;
+  EXPECT_GT(greenViewportPixels(io::readImage(dir / "air.png")), 20000);
+}
+
 TEST(StudioHeadless, SavedSessionReopensWhereItStopped) {
   if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
   fs::path dir = scratchDir();
