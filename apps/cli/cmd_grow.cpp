@@ -14,6 +14,7 @@
 #include "tendril/plant/plant_model.h"
 #include "tendril/scene/scene.h"
 #include "tendril/session/session.h"
+#include "tendril/wind/sph.h"
 
 #include <fmt/format.h>
 
@@ -110,6 +111,10 @@ int runGrow(const GrowOptions& o) {
       log::info("{}: {} segments, {} leaves, {:.2f} m of stem, {} tips", p.name, s.nodes, s.leaves, s.totalLength,
                 s.tips);
     }
+    if (const wind::SphAir* air = session.air(); air && session.airSteps() > 0)
+      log::info("simulated air: {} particles at {} m spacing, {:.1f} ms per step on average ({} substeps in the last)",
+                air->count(), air->settings().spacing, 1e3 * session.airSeconds() / session.airSteps(),
+                air->timings().substeps);
     std::string files;
     for (const auto& w : written) files += (files.empty() ? "" : ", ") + w;
     if (sequenceFiles > 0) files += fmt::format(" and a sequence of {} file(s) in {}", sequenceFiles, outDir.string());

@@ -28,6 +28,19 @@ TEST(WindCli, GrowWritesTheLoopingClipAndItsFrames) {
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "plant-wind_0012.glb"));
 }
 
+TEST(WindCli, GrowWithSimulatedAirReportsIt) {
+  auto dir = test::scratchDir();
+  auto r = test::runTendril("grow " + quoted(test::sourceDir() / "examples/scenes/particles-fig07-wind.json") + " -o " +
+                                quoted(dir / "out") + " --steps 8 --format glb",
+                            dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("simulated air: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("at 0.05 m spacing"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("ms per step on average"), std::string::npos) << r.err;
+  auto v = test::validateGltf(dir / "out" / "plant.glb", dir);
+  EXPECT_EQ(v.exitCode, 0) << v.out << v.err;
+}
+
 TEST(WindCli, FramesWithoutAClipAreAnErrorBeforeGrowing) {
   auto dir = test::scratchDir();
   auto r = test::runTendril("grow " + quoted(test::sourceDir() / "examples/scenes/default.json") + " -o " +

@@ -111,6 +111,8 @@ void Session::step() {
   if (air_) {
     // The air and the particle plants act on each other (two-way coupling), then the plants step.
     air_->step(*env_, particleWorld());
+    airSeconds_ += air_->timings().total;
+    ++airSteps_;
   }
   for (auto& s : systems_) s->step(*env_);
   ++steps_;

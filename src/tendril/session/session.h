@@ -81,6 +81,9 @@ class Session {
   // The simulated air (wind mode sph), or null.
   wind::SphAir* air() { return air_.get(); }
   const wind::SphAir* air() const { return air_.get(); }
+  // Wall-clock seconds the air's steps took in this process, and how many (for reports).
+  double airSeconds() const { return airSeconds_; }
+  uint32_t airSteps() const { return airSteps_; }
 
   // The scene document and directory (null/empty when built from a Scene alone).
   const Json& sceneDocument() const { return sceneDocument_; }
@@ -169,6 +172,8 @@ class Session {
   std::map<std::string, std::shared_ptr<const TriangleMesh>> meshCache_;  // resolved path -> mesh
   uint64_t obstacleRevision_ = 0;
   uint32_t steps_ = 0;
+  double airSeconds_ = 0.0;
+  uint32_t airSteps_ = 0;
 };
 
 }  // namespace tendril::session
