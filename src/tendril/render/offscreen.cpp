@@ -12,7 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <map>
+#include <set>
 #include <mutex>
 #include <string_view>
 #include <vector>
@@ -49,33 +49,20 @@ bool hasExtension(const char* list, const char* name) {
   return false;
 }
 
-// eglTerminate ends a display for everyone in the process, so displays are reference-counted
-// here: several OffscreenContexts (tests, a preview beside a render) may share one.
+// A display, once initialised, stays so for the life of the process: eglTerminate would end it
+// for every context in the process (several OffscreenContexts — tests, a preview beside a
+// render — may share one), and it unloads the driver, whose few lasting allocations then look
+// leaked to LeakSanitizer (sanitizer builds) and must be made again by the next context.
 std::mutex gDisplayMutex;
-std::map<EGLDisplay, int> gDisplayRefs;
+std::set<EGLDisplay> gInitialised;
 
-bool acquireDisplay(EGLDisplay display) {
+bool initialiseDisplay(EGLDisplay display) {
   std::lock_guard lock(gDisplayMutex);
-  int& refs = gDisplayRefs[display];
-  if (refs == 0) {
-    EGLint major = 0, minor = 0;
-    if (!eglInitialize(display, &major, &minor)) {
-      gDisplayRefs.erase(display);
-      return false;
-    }
-  }
-  ++refs;
+  if (gInitialised.count(display)) return true;
+  EGLint major = 0, minor = 0;
+  if (!eglInitialize(display, &major, &minor)) return false;
+  gInitialised.insert(display);
   return true;
-}
-
-void releaseDisplay(EGLDisplay display) {
-  std::lock_guard lock(gDisplayMutex);
-  auto it = gDisplayRefs.find(display);
-  if (it == gDisplayRefs.end()) return;
-  if (--it->second == 0) {
-    eglTerminate(display);
-    gDisplayRefs.erase(it);
-  }
 }
 
 constexpr int kContextVersions[][2] = {{4, 6}, {4, 5}, {4, 3}, {4, 1}};
@@ -91,13 +78,12 @@ struct OffscreenContext::Impl {
   // Makes a current 4.1+ core context on `display`; on failure returns why and leaves nothing.
   std::string tryDisplay(EGLDisplay dpy, bool pbuffer) {
     if (dpy == EGL_NO_DISPLAY) return fmt::format("no display ({})", eglErrorName(eglGetError()));
-    if (!acquireDisplay(dpy)) return fmt::format("eglInitialize failed ({})", eglErrorName(eglGetError()));
+    if (!initialiseDisplay(dpy)) return fmt::format("eglInitialize failed ({})", eglErrorName(eglGetError()));
     auto fail = [&](std::string why) {
       if (context != EGL_NO_CONTEXT) eglDestroyContext(dpy, context);
       if (surface != EGL_NO_SURFACE) eglDestroySurface(dpy, surface);
       context = EGL_NO_CONTEXT;
       surface = EGL_NO_SURFACE;
-      releaseDisplay(dpy);
       return why;
     };
     if (!eglBindAPI(EGL_OPENGL_API)) return fail(fmt::format("no desktop OpenGL API ({})", eglErrorName(eglGetError())));
@@ -194,7 +180,6 @@ OffscreenContext::~OffscreenContext() {
   if (eglGetCurrentContext() == m.context) eglMakeCurrent(m.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
   eglDestroyContext(m.display, m.context);
   if (m.surface != EGL_NO_SURFACE) eglDestroySurface(m.display, m.surface);
-  releaseDisplay(m.display);
 }
 
 void OffscreenContext::makeCurrent() const {
