@@ -25,6 +25,19 @@ inline constexpr float kTwoPi = 2.0f * kPi;
 constexpr float radians(float degrees) { return degrees * (kPi / 180.0f); }
 constexpr float degrees(float radians) { return radians * (180.0f / kPi); }
 
+// Sine and cosine of x: below 0.5 rad by short series (error under 1e-8: small angles, such as
+// sway and gust turns, cost a few multiplications), the library's beyond.
+inline void sinCos(float x, float* s, float* c) {
+  if (std::fabs(x) < 0.5f) {
+    const float x2 = x * x;
+    *s = x * (1.0f + x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f))));
+    *c = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f))));
+  } else {
+    *s = std::sin(x);
+    *c = std::cos(x);
+  }
+}
+
 inline bool isFinite(float v) { return std::isfinite(v); }
 inline bool isFinite(const Vec2& v) { return std::isfinite(v.x()) && std::isfinite(v.y()); }
 inline bool isFinite(const Vec3& v) {

@@ -53,17 +53,9 @@ Vec3 WindField::ambient(const Vec3& p, float t) const {
   float gust = noise(tau, sigma, s.seed);
   float turn = noise(tau + 101.3f, sigma + 57.1f, s.seed ^ 0x5bd1e995ull);
   // dir turned by θ about +Y: (x cos θ + z sin θ, y, z cos θ − x sin θ); θ is at most
-  // gustTurn, mostly a few degrees, where short series give sine and cosine to float precision.
-  const float theta = s.gustTurn * turn;
+  // gustTurn, mostly a few degrees (sinCos's short series).
   float c, sn;
-  if (std::fabs(theta) < 0.5f) {
-    const float t2 = theta * theta;
-    sn = theta * (1.0f + t2 * (-1.0f / 6.0f + t2 * (1.0f / 120.0f + t2 * (-1.0f / 5040.0f))));
-    c = 1.0f + t2 * (-0.5f + t2 * (1.0f / 24.0f + t2 * (-1.0f / 720.0f + t2 * (1.0f / 40320.0f))));
-  } else {
-    sn = std::sin(theta);
-    c = std::cos(theta);
-  }
+  sinCos(s.gustTurn * turn, &sn, &c);
   const Vec3 turned(dir.x() * c + dir.z() * sn, dir.y(), dir.z() * c - dir.x() * sn);
   return speed * std::max(0.0f, 1.0f + s.gustStrength * gust) * turned;
 }

@@ -28,18 +28,10 @@ float atan2Upper(float y, float x) {
 }
 
 // The rotation by `angle` about unit `axis`; sway angles are small, so their half-angle sine
-// and cosine come from short series (error < 1e-8 below 0.5 rad), the library beyond.
+// and cosine mostly come from sinCos's short series.
 inline Quat swayRotation(float angle, const Vec3& axis) {
-  const float h = 0.5f * angle;
   float c, s;
-  if (std::fabs(h) < 0.5f) {
-    const float h2 = h * h;
-    s = h * (1.0f + h2 * (-1.0f / 6.0f + h2 * (1.0f / 120.0f + h2 * (-1.0f / 5040.0f))));
-    c = 1.0f + h2 * (-0.5f + h2 * (1.0f / 24.0f + h2 * (-1.0f / 720.0f + h2 * (1.0f / 40320.0f))));
-  } else {
-    s = std::sin(h);
-    c = std::cos(h);
-  }
+  sinCos(0.5f * angle, &s, &c);
   return Quat(c, s * axis.x(), s * axis.y(), s * axis.z());
 }
 
