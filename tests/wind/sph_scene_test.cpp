@@ -65,5 +65,33 @@ TEST(SphScene, SettingsAreChecked) {
                   .sph.allClosed());
 }
 
+// What only the air itself can check — an emitter outside its domain, a domain of too many
+// cells, a fill beyond max_particles — is named in the scene file too, not as "SPH ...".
+TEST(SphScene, WhatTheAirRefusesIsNamedInTheScene) {
+  auto message = [](const std::string& sph, const std::string& emitter) {
+    std::string json = R"({"tendril": 1, "environment": {"wind": {"mode": "sph", "velocity": [2, 0, 0], "sph": )" + sph +
+                       R"(, "emitters": [{"position": [0.1, 0.5, 0.5]}, )" + emitter + "]}}}";
+    try {
+      scene::Scene s = scene::parseScene(parseJson(json, "air.json"), "air.json", test::sourceDir());
+      session::Session session(std::move(s));
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string box = R"({"domain_min": [0, 0, 0], "domain_max": [1, 1, 1], "fill": false})";
+  const std::string inside = R"({"position": [0.2, 0.5, 0.5]})";
+  EXPECT_EQ(message(box, inside), "no error");
+  EXPECT_NE(message(box, R"({"position": [5, 0.5, 0.5]})").find("air.json:/environment/wind/emitters/1/position:"),
+            std::string::npos)
+      << message(box, R"({"position": [5, 0.5, 0.5]})");
+  const std::string huge = R"({"domain_min": [0, 0, 0], "domain_max": [900, 900, 900], "spacing": 0.05, "fill": false})";
+  EXPECT_NE(message(huge, inside).find("air.json:/environment/wind/sph/domain_max:"), std::string::npos)
+      << message(huge, inside);
+  const std::string crowded = R"({"domain_min": [0, 0, 0], "domain_max": [1, 1, 1], "max_particles": 100})";
+  EXPECT_NE(message(crowded, inside).find("air.json:/environment/wind/sph/fill:"), std::string::npos)
+      << message(crowded, inside);
+}
+
 }  // namespace
 }  // namespace tendril

@@ -510,6 +510,108 @@ TEST(SphNeighbourSearch, VelocityAtMatchesABruteForceSum) {
   EXPECT_GT(covered, 300);
 }
 
+// Within a frame only particles that may have come within h of an obstacle ask for its
+// distance; at a frame's start everyone asks only when an obstacle was added or moved (the
+// others' distance bounds still hold). That gives the distances asking everyone gives: a run
+// whose obstacle is "moved" to where it stands before every frame (everyone asks) is bit for bit
+// the same. And an obstacle really moved into the air pushes it out at once.
+TEST(SphAir, ObstacleDistancesAreAskedAgainWhenAnObstacleMoves) {
+  auto stream = [](env::Environment& env) {
+    // Clear of the ground: air caught between an obstacle and the ground has nowhere to go
+    // (docs/sph.md, "Where two walls meet").
+    addBox(env, "block", Vec3(0.3f, 0.3f, 0.3f), Vec3(0.2f, 0.35f, 0.0f));
+    addGround(env, Vec2(4, 4));
+    env.commit();
+  };
+  Tunnel a = windTunnel(), b = windTunnel();
+  a.env = std::make_unique<env::Environment>(), b.env = std::make_unique<env::Environment>();
+  stream(*a.env), stream(*b.env);
+  SphAir kept = streamingAir(a, 3.0f), asked = streamingAir(b, 3.0f);
+  const RigidTransform still = b.env->obstacle(0).worldFromLocal;
+  auto hash = [](const SphAir& air) {
+    Hasher h;
+    h.add(air.positions()), h.add(air.velocities()), h.add(air.densities());
+    return h.digest();
+  };
+  for (int frame = 0; frame < 10; ++frame) {
+    const uint64_t revision = b.env->obstacleRevision();
+    b.env->setObstacleTransform(0, still);  // not moved, but everyone asks again
+    ASSERT_NE(b.env->obstacleRevision(), revision);
+    kept.step(*a.env, nullptr);
+    asked.step(*b.env, nullptr);
+    ASSERT_EQ(hash(kept), hash(asked)) << "frame " << frame;
+  }
+
+  // Now move the block 20 cm upstream, into air that was clear of it: the particles it now
+  // covers are pushed out by the next step.
+  RigidTransform moved = still;
+  moved.translation.x() -= 0.2f;
+  a.env->setObstacleTransform(0, moved);
+  a.env->commit();
+  size_t covered = 0;
+  for (const Vec3& p : kept.positions()) covered += a.env->signedDistance(p) < 0.0f;
+  ASSERT_GT(covered, 20u) << "the block moved over air particles";
+  kept.step(*a.env, nullptr);
+  float deepest = 1.0f;
+  for (const Vec3& p : kept.positions()) deepest = std::min(deepest, a.env->signedDistance(p));
+  EXPECT_GE(deepest, 0.0f) << covered << " particles were covered; none is inside after a step";
+}
+
+// A damaged session must not hand the air values it cannot hold: each is an Error.
+TEST(SphAir, DamagedSavedAirIsRefused) {
+  const Tunnel tunnel = windTunnel();
+  SphAir air = streamingAir(tunnel, 3.0f);
+  air.step(*tunnel.env, nullptr);
+  // The layout of SphAir::saveState, written by hand with one value changed.
+  auto write = [&](auto&& change) {
+    std::vector<SphEmitter> emitters = air.emitters();
+    std::vector<double> clocks(emitters.size(), 0.0);
+    float mass = air.particleMass(), h = air.supportRadius(), time = air.time();
+    std::vector<Vec3> x = air.positions(), v = air.velocities();
+    std::vector<float> rho = air.densities();
+    change(emitters, clocks, mass, h, time, x, v, rho);
+    const size_t n = x.size();
+    ArchiveWriter out;
+    out.tag(0x48505331);
+    out.vector(emitters), out.vector(clocks);
+    out.f32(mass), out.f32(h), out.f32(time);
+    out.u64(1);
+    out.boolean(false), out.boolean(false);
+    out.vector(x), out.vector(v), out.vector(rho);
+    out.vector(std::vector<float>(n, 0.0f)), out.vector(std::vector<float>(n, std::numeric_limits<float>::infinity()));
+    out.vector(std::vector<Vec3>(n, Vec3::Zero())), out.vector(std::vector<uint8_t>(n, 0));
+    return out;
+  };
+  auto loads = [&](const ArchiveWriter& out) {
+    SphAir fresh(tunnel.settings);
+    ArchiveReader in(out.data(), "saved.tses");
+    fresh.loadState(in);
+    return fresh.count();
+  };
+  using E = std::vector<SphEmitter>;
+  using D = std::vector<double>;
+  using P = std::vector<Vec3>;
+  using R = std::vector<float>;
+  EXPECT_EQ(loads(write([](E&, D&, float&, float&, float&, P&, P&, R&) {})), air.count()) << "undamaged";
+  auto refused = [&](const char* what, auto&& change) {
+    try {
+      loads(write(change));
+      ADD_FAILURE() << what << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("saved.tses"), std::string::npos) << e.what();
+    }
+  };
+  refused("a NaN position", [](E&, D&, float&, float&, float&, P& x, P&, R&) { x[3].y() = std::nanf(""); });
+  refused("a position far outside the domain", [](E&, D&, float&, float&, float&, P& x, P&, R&) { x[0].x() = 1e30f; });
+  refused("an infinite velocity", [](E&, D&, float&, float&, float&, P&, P& v, R&) { v[5].z() = 1.0f / 0.0f; });
+  refused("a zero density", [](E&, D&, float&, float&, float&, P&, P&, R& rho) { rho[7] = 0.0f; });
+  refused("another particle mass", [](E&, D&, float& m, float&, float&, P&, P&, R&) { m *= 2.0f; });
+  refused("another support radius", [](E&, D&, float&, float& h, float&, P&, P&, R&) { h = 0.0f; });
+  refused("an emitter as wide as a city", [](E& e, D&, float&, float&, float&, P&, P&, R&) { e[0].radius = 1e6f; });
+  refused("an emitter outside the domain", [](E& e, D&, float&, float&, float&, P&, P&, R&) { e[0].position.x() = 50; });
+  refused("a negative emitter clock", [](E&, D& c, float&, float&, float&, P&, P&, R&) { c[0] = -1.0; });
+}
+
 TEST(SphAir, BadSettingsAreRefused) {
   auto refuses = [](auto&& change) {
     SphSettings s;
@@ -545,6 +647,14 @@ TEST(SphAir, BadSettingsAreRefused) {
   e.speed = 2.0f;
   e.direction = Vec3::Zero();
   EXPECT_THROW(air.addEmitter(e), Error);
+  e.direction = Vec3(1, 0, 0);
+  e.radius = 1e6f;  // its layers would span 10¹⁵ lattice sites
+  try {
+    air.addEmitter(e);
+    ADD_FAILURE() << "a 1000 km emitter was accepted";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.location(), "radius") << error.what();
+  }
   EXPECT_TRUE(air.emitters().empty());
   EXPECT_THROW(air.fillBox(Vec3(3, 3, 3), Vec3(4, 4, 4)), Error) << "outside the domain";
   SphSettings small;

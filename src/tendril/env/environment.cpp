@@ -227,7 +227,15 @@ float Environment::walkTowardClosest(const ObstacleData& o, const Vec3& p, uint3
   return best;
 }
 
-Environment::Environment() : strokeGrid_(std::make_unique<StrokeGrid>()) {}
+namespace {
+// Revisions are unique in the process: a new environment never repeats an old one's.
+uint64_t nextObstacleRevision() {
+  static std::atomic<uint64_t> counter{0};
+  return counter.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+}  // namespace
+
+Environment::Environment() : strokeGrid_(std::make_unique<StrokeGrid>()), obstacleRevision_(nextObstacleRevision()) {}
 
 Environment::~Environment() {
   if (scene_) rtcReleaseScene(static_cast<RTCScene>(scene_));
@@ -262,6 +270,7 @@ uint32_t Environment::addObstacle(ObstacleDef def) {
   o->updateWorld();
   obstacles_.push_back(std::move(o));
   dirty_ = true;
+  obstacleRevision_ = nextObstacleRevision();
   return static_cast<uint32_t>(obstacles_.size() - 1);
 }
 
@@ -271,6 +280,7 @@ void Environment::setObstacleTransform(uint32_t id, const RigidTransform& t) {
   o.updateWorld();
   o.moved = true;
   dirty_ = true;
+  obstacleRevision_ = nextObstacleRevision();
 }
 
 size_t Environment::obstacleCount() const { return obstacles_.size(); }

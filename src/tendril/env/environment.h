@@ -103,6 +103,9 @@ class Environment {
   void setObstacleTransform(uint32_t id, const RigidTransform& worldFromLocal);
   size_t obstacleCount() const;
   const ObstacleInfo& obstacle(uint32_t id) const;
+  // Changes whenever an obstacle is added or moved, and differs between Environment objects,
+  // so a cache of distances keyed by it (the SPH air's) also notices another environment.
+  uint64_t obstacleRevision() const { return obstacleRevision_; }
   // The obstacle's mesh in its local frame (welded).
   TriangleMesh obstacleMesh(uint32_t id) const;
 
@@ -183,6 +186,7 @@ class Environment {
   WindField wind_;
   void* scene_ = nullptr;  // RTCScene
   bool dirty_ = true;
+  uint64_t obstacleRevision_;
 };
 
 const char* obstacleKindName(ObstacleKind kind);

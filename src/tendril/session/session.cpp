@@ -33,6 +33,17 @@ env::WindSettings loadWind(ArchiveReader& in) {
   w.gustStrength = in.f32(), w.gustPeriod = in.f32(), w.gustScale = in.f32(), w.gustTurn = in.f32();
   w.seed = in.u64();
   in.vector(w.emitters);
+  // The ranges the scene format allows (scene.cpp, readWind).
+  auto within = [](float v, float lo, float hi) { return v >= lo && v <= hi; };
+  const float maxAngle = radians(90.0f) * 1.0001f;
+  if (!isFinite(w.velocity) || w.velocity.cwiseAbs().maxCoeff() > 200.0f || !within(w.gustStrength, 0.0f, 1.0f) ||
+      !within(w.gustPeriod, 0.05f, 3600.0f) || !within(w.gustScale, 0.01f, 1e4f) || !within(w.gustTurn, 0.0f, maxAngle))
+    in.fail(at, "the saved wind's settings are out of range");
+  for (const env::WindEmitter& e : w.emitters)
+    if (!isFinite(e.position) || !(std::abs(e.direction.squaredNorm() - 1.0f) < 1e-4f) ||
+        !within(e.speed, 0.0f, 200.0f) || !within(e.radius, 0.001f, 100.0f) || !within(e.reach, 0.01f, 1e4f) ||
+        !within(e.spread, 0.0f, radians(45.0f) * 1.0001f) || !within(e.rate, 0.0f, 1e7f))
+      in.fail(at, "a saved wind emitter is out of range");
   return w;
 }
 
@@ -44,6 +55,18 @@ wind::SphEmitter sphEmitter(const env::WindEmitter& e) {
   se.rate = e.rate;
   se.radius = e.radius;
   return se;
+}
+
+// The scene key of an SphSettings member named in an Error (camelCase → snake_case; the
+// domain's checks concern its extent).
+std::string sphSettingKey(const std::string& member) {
+  if (member == "domain") return "domain_max";
+  std::string key;
+  for (char c : member) {
+    if (c >= 'A' && c <= 'Z') key += '_', key += char(c - 'A' + 'a');
+    else key += c;
+  }
+  return key;
 }
 
 }  // namespace
@@ -80,9 +103,28 @@ Session::Session(scene::Scene scene, Json sceneDocument, std::filesystem::path b
     wind::SphSettings settings = scene_.sph;
     for (const auto& s : systems_)
       if (auto* p = dynamic_cast<const particles::ParticlePlantSystem*>(s.get())) settings.dt = p->world().settings().dt;
-    air_ = std::make_unique<wind::SphAir>(settings);
-    for (const env::WindEmitter& e : scene_.wind.emitters) air_->addEmitter(sphEmitter(e));
-    if (scene_.sphFill) air_->fillBox(settings.domainMin, settings.domainMax, *env_, scene_.wind.velocity);
+    // What the air refuses is named in the scene: its settings' keys under /environment/wind/sph,
+    // an emitter's under /environment/wind/emitters/i.
+    const std::string wind = "/environment/wind";
+    try {
+      air_ = std::make_unique<wind::SphAir>(settings);
+    } catch (const Error& e) {
+      throw Error(scene_.source, wind + "/sph/" + sphSettingKey(e.location()), e.message());
+    }
+    for (size_t i = 0; i < scene_.wind.emitters.size(); ++i) {
+      try {
+        air_->addEmitter(sphEmitter(scene_.wind.emitters[i]));
+      } catch (const Error& e) {
+        throw Error(scene_.source, fmt::format("{}/emitters/{}/{}", wind, i, e.location()), e.message());
+      }
+    }
+    if (scene_.sphFill) {
+      try {
+        air_->fillBox(settings.domainMin, settings.domainMax, *env_, scene_.wind.velocity);
+      } catch (const Error& e) {
+        throw Error(scene_.source, wind + "/sph/fill", e.message());
+      }
+    }
     env_->setAirFlow(air_.get());
   }
 }
@@ -530,8 +572,7 @@ void Session::setEmitters(std::vector<env::WindEmitter> emitters) {
   env::WindSettings w = env_->windField().settings();
   if (air_) {
     // Checked first, so that a bad emitter leaves the air as it was.
-    wind::SphAir check(air_->settings());
-    for (const env::WindEmitter& e : emitters) check.addEmitter(sphEmitter(e));
+    for (const env::WindEmitter& e : emitters) air_->checkEmitter(sphEmitter(e));
     air_->clearEmitters();
     for (const env::WindEmitter& e : emitters) air_->addEmitter(sphEmitter(e));
   }

@@ -520,6 +520,15 @@ void SphAir::validate() const {
 }
 
 uint32_t SphAir::addEmitter(const SphEmitter& e) {
+  checkEmitter(e);
+  SphEmitter copy = e;
+  copy.direction.normalize();
+  emitters_.push_back(copy);
+  emitterClock_.push_back(0.0);
+  return uint32_t(emitters_.size() - 1);
+}
+
+void SphAir::checkEmitter(const SphEmitter& e) const {
   auto bad = [&](const char* key, const std::string& m) { return Error("SPH emitter", key, m); };
   for (int k = 0; k < 3; ++k)
     if (!std::isfinite(e.position[k]) || !std::isfinite(e.direction[k]))
@@ -529,15 +538,18 @@ uint32_t SphAir::addEmitter(const SphEmitter& e) {
     throw bad("speed", fmt::format("must be in (0, soundSpeed = {}) m/s, got {}", settings_.soundSpeed, e.speed));
   if (!(e.rate >= 0.0f && std::isfinite(e.rate))) throw bad("rate", fmt::format("must be >= 0 particles/s, got {}", e.rate));
   if (!(e.radius > 0.0f && std::isfinite(e.radius))) throw bad("radius", fmt::format("must be > 0 m, got {}", e.radius));
+  // A layer is the lattice within the disc's bounding square (emit): keep it to what the air
+  // could ever hold.
+  const double side = 2.0 * std::floor(double(e.radius) / double(settings_.spacing)) + 1.0;
+  const double siteCap = std::max(4.0 * double(settings_.maxParticles), 1e6);
+  if (side * side > siteCap)
+    throw bad("radius", fmt::format("{} m spans {:.3g} lattice sites of spacing {} m per layer, more than {:.3g} (four "
+                                    "times maxParticles): shrink it or raise maxParticles",
+                                    e.radius, side * side, settings_.spacing, siteCap));
   const Bounds3 domain{settings_.domainMin, settings_.domainMax};
   if (!domain.contains(e.position))
     throw bad("position", fmt::format("({:.3g}, {:.3g}, {:.3g}) lies outside the SPH domain", e.position.x(),
                                       e.position.y(), e.position.z()));
-  SphEmitter copy = e;
-  copy.direction.normalize();
-  emitters_.push_back(copy);
-  emitterClock_.push_back(0.0);
-  return uint32_t(emitters_.size() - 1);
 }
 
 void SphAir::clearEmitters() {
@@ -1288,14 +1300,20 @@ void SphAir::step(const env::Environment& env, particles::ParticleWorld* plants)
   const float h = h_;
   {
     ScopedTimer t(&timings_.obstacles);
-    // Everyone once per frame (obstacles may have moved), then within the frame only particles
-    // that may have come within h of one.
+    // Everyone when the obstacles changed (or this is another environment); otherwise, and
+    // within the frame, only the particles that may have come within h of one. The others'
+    // distance is still at least their bound ≥ h, so their sdf_ is +inf, as a query would give:
+    // the same distances as asking everyone.
     if (env.obstacleCount() > 0) {
-      parallelFor(0, count(), [&](size_t i) { querySdf(env, i); }, 1024);
+      const bool moved = env.obstacleRevision() != sdfRevision_;
+      parallelFor(0, count(), [&](size_t i) {
+        if (moved || !(sdfBudget_[i] >= h)) querySdf(env, i);
+      }, 1024);
     } else {
       std::fill(sdf_.begin(), sdf_.end(), kInf);
       std::fill(sdfBudget_.begin(), sdfBudget_.end(), kInf);
     }
+    sdfRevision_ = env.obstacleRevision();
   }
   {
     ScopedTimer t(&timings_.neighbours);

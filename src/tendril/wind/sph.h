@@ -101,9 +101,13 @@ class SphAir final : public env::AirFlow {
 
   const SphSettings& settings() const { return settings_; }
 
-  // Throws Error when the emitter is not finite, its speed, rate or radius is out of range,
-  // or its centre lies outside the domain.
+  // Throws Error when the emitter is not finite, its speed, rate or radius is out of range
+  // (a layer, the lattice in the disc's bounding square, may span at most four times
+  // maxParticles sites), or its centre lies outside the domain.
   uint32_t addEmitter(const SphEmitter& emitter);
+  // Throws the Error addEmitter would for the emitter (its location names the member),
+  // changing nothing.
+  void checkEmitter(const SphEmitter& emitter) const;
   const std::vector<SphEmitter>& emitters() const { return emitters_; }
   void clearEmitters();
 
@@ -177,6 +181,7 @@ class SphAir final : public env::AirFlow {
   float time_ = 0;
   uint64_t steps_ = 0;
   bool warnedCapacity_ = false, warnedSubsteps_ = false;
+  uint64_t sdfRevision_ = 0;  // the environment's obstacleRevision() the distances below are for (0: none)
   SphTimings timings_;
 
   // Particles, dense, in spawn order.

@@ -3,6 +3,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 namespace tendril::wind {
 
 namespace {
@@ -29,7 +31,25 @@ void SphAir::loadState(ArchiveReader& in) {
   in.vector(emitters_);
   in.vector(emitterClock_);
   if (emitterClock_.size() != emitters_.size()) in.fail("the saved air's emitter records differ in length");
-  mass_ = in.f32(), h_ = in.f32(), time_ = in.f32();
+  for (const SphEmitter& e : emitters_) {
+    try {
+      checkEmitter(e);
+    } catch (const Error& error) {
+      in.fail(fmt::format("a saved emitter is invalid: {}", error.what()));
+    }
+    if (!(std::abs(e.direction.squaredNorm() - 1.0f) < 1e-4f))
+      in.fail("a saved emitter's direction is not a unit vector");
+  }
+  for (const double clock : emitterClock_)
+    if (!(clock >= 0.0 && clock < 1e6)) in.fail("a saved emitter's clock is out of range");
+  // The mass and support follow from the settings; the saved ones (bit-exact for an exact
+  // continuation) must be those, up to another machine's round-off.
+  const float mass = in.f32(), h = in.f32();
+  if (!(std::abs(mass - mass_) <= 1e-4f * mass_ && std::abs(h - h_) <= 1e-4f * h_))
+    in.fail(fmt::format("the saved air's particle mass {} kg and support {} m are not its settings' ({} kg, {} m)", mass,
+                        h, mass_, h_));
+  mass_ = mass, h_ = h, time_ = in.f32();
+  sdfRevision_ = 0;  // the distances are queried again at the next step
   steps_ = in.u64();
   warnedCapacity_ = in.boolean(), warnedSubsteps_ = in.boolean();
   in.vector(x_), in.vector(v_), in.vector(rho_);
@@ -40,6 +60,14 @@ void SphAir::loadState(ArchiveReader& in) {
     in.fail("the saved air's particle arrays differ in length");
   if (n > settings_.maxParticles)
     in.fail(fmt::format("the saved air has {} particles, more than its limit {}", n, settings_.maxParticles));
+  if (!std::isfinite(time_)) in.fail("the saved air's time is not finite");
+  // Particles are inside the domain (those that left it are removed at the end of a step).
+  const Vec3 lo = settings_.domainMin - Vec3::Constant(h_), hi = settings_.domainMax + Vec3::Constant(h_);
+  for (size_t i = 0; i < n; ++i)
+    if (!isFinite(x_[i]) || (x_[i].array() < lo.array()).any() || (x_[i].array() > hi.array()).any() ||
+        !isFinite(v_[i]) || !(rho_[i] > 0.0f && rho_[i] < 1e30f) || dead_[i] > 1 || std::isnan(sdfBudget_[i]) ||
+        std::isnan(sdf_[i]) || !isFinite(sdfNormal_[i]))
+      in.fail(fmt::format("the saved air's particle {} is damaged (a value out of range)", i));
   buildGrid();  // velocityAt samples the restored air, not the grid of the air before
 }
 
