@@ -20,6 +20,14 @@ TEST(JsonReader, SyntaxErrorNamesLineAndColumn) {
   EXPECT_EQ(msg.rfind("scene.json:3:", 0), 0u) << msg;
 }
 
+// A number beyond a double's range is an Error naming the file and where the number is (the
+// JSON library throws it as another kind of exception, without a position; found by fuzzing).
+TEST(JsonReader, NumberOverflowNamesLineAndColumn) {
+  std::string msg = errorOf([] { parseJson("{\n  \"seed\": 1e999\n}", "scene.json"); });
+  EXPECT_EQ(msg.rfind("scene.json:2:11: ", 0), 0u) << msg;
+  EXPECT_NE(msg.find("1e999"), std::string::npos) << msg;
+}
+
 TEST(JsonReader, ReadsValuesWithDefaults) {
   Json j = parseJson(R"({"n": 2.5, "i": 3, "b": true, "s": "x", "v": [1,2,3], "a": 90})", "f");
   JsonObject o(j, "f");

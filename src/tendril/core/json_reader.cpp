@@ -42,6 +42,14 @@ Json parseJson(std::string_view text, const std::string& source) {
     return Json::parse(text.begin(), text.end());
   } catch (const Json::parse_error& e) {
     throw Error(source, lineColumn(text, e.byte), stripParsePrefix(e.what()));
+  } catch (const Json::exception& e) {
+    // A number too large for a double ("number overflow parsing '1e999'"): nlohmann gives no
+    // position, so the place is where the quoted token first occurs.
+    const std::string message = stripParsePrefix(e.what());
+    const size_t open = message.find('\''), close = message.rfind('\'');
+    size_t at = std::string_view::npos;
+    if (open != std::string::npos && close > open + 1) at = text.find(message.substr(open + 1, close - open - 1));
+    throw Error(source, at == std::string_view::npos ? std::string() : lineColumn(text, at + 1), message);
   }
 }
 
