@@ -603,7 +603,10 @@ TEST(SphAir, DamagedSavedAirIsRefused) {
   };
   refused("a NaN position", [](E&, D&, float&, float&, float&, P& x, P&, R&) { x[3].y() = std::nanf(""); });
   refused("a position far outside the domain", [](E&, D&, float&, float&, float&, P& x, P&, R&) { x[0].x() = 1e30f; });
-  refused("an infinite velocity", [](E&, D&, float&, float&, float&, P&, P& v, R&) { v[5].z() = 1.0f / 0.0f; });
+  refused("an infinite velocity", [](E&, D&, float&, float&, float&, P&, P& v, R&) { v[5].z() = std::numeric_limits<float>::infinity(); });
+  // Found by fuzzing: finite, but its square overflows the forces to NaN in the first step.
+  refused("a velocity of 1e37 m/s", [](E&, D&, float&, float&, float&, P&, P& v, R&) { v[5].x() = -3.85e37f; });
+  refused("a density of 1e29", [](E&, D&, float&, float&, float&, P&, P&, R& rho) { rho[2] = 1e29f; });
   refused("a zero density", [](E&, D&, float&, float&, float&, P&, P&, R& rho) { rho[7] = 0.0f; });
   refused("another particle mass", [](E&, D&, float& m, float&, float&, P&, P&, R&) { m *= 2.0f; });
   refused("another support radius", [](E&, D&, float&, float& h, float&, P&, P&, R&) { h = 0.0f; });

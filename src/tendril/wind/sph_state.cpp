@@ -61,12 +61,16 @@ void SphAir::loadState(ArchiveReader& in) {
   if (n > settings_.maxParticles)
     in.fail(fmt::format("the saved air has {} particles, more than its limit {}", n, settings_.maxParticles));
   if (!std::isfinite(time_)) in.fail("the saved air's time is not finite");
-  // Particles are inside the domain (those that left it are removed at the end of a step).
+  // Particles are inside the domain (those that left it are removed at the end of a step),
+  // slower than any wind a scene can fill the air with (a step clamps them to the speed of
+  // sound), within a hundred times the rest density, and their obstacle normals unit or zero:
+  // values beyond would overflow the forces.
   const Vec3 lo = settings_.domainMin - Vec3::Constant(h_), hi = settings_.domainMax + Vec3::Constant(h_);
+  const float maxSpeed = std::max(1000.0f, settings_.soundSpeed), maxDensity = 100.0f * settings_.restDensity;
   for (size_t i = 0; i < n; ++i)
     if (!isFinite(x_[i]) || (x_[i].array() < lo.array()).any() || (x_[i].array() > hi.array()).any() ||
-        !isFinite(v_[i]) || !(rho_[i] > 0.0f && rho_[i] < 1e30f) || dead_[i] > 1 || std::isnan(sdfBudget_[i]) ||
-        std::isnan(sdf_[i]) || !isFinite(sdfNormal_[i]))
+        !(v_[i].norm() <= maxSpeed) || !(rho_[i] > 0.0f && rho_[i] <= maxDensity) || dead_[i] > 1 ||
+        std::isnan(sdfBudget_[i]) || std::isnan(sdf_[i]) || !(sdfNormal_[i].squaredNorm() <= 1.01f))
       in.fail(fmt::format("the saved air's particle {} is damaged (a value out of range)", i));
   buildGrid();  // velocityAt samples the restored air, not the grid of the air before
 }
