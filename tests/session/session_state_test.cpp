@@ -134,6 +134,29 @@ TEST(SessionState, DamagedSessionFilesAreErrorsNotCrashes) {
   }
 }
 
+// Sessions the session fuzzer (fuzz/README.md) damaged in ways the reader missed: a particle
+// world whose saved spatial hash points past its entries (a heap overflow in the next step's
+// crowding query), and air with a finite speed of 1e37 m/s (NaN positions in the next step).
+TEST(SessionState, DamagedStatesFoundByFuzzingAreErrors) {
+  const struct {
+    const char* file;
+    const char* message;
+  } cases[] = {{"fuzz-world-hash.tses", "the spatial hash of the saved world is damaged"},
+               {"fuzz-air-speed.tses", "the saved air's particle 122 is damaged"}};
+  for (const auto& c : cases) {
+    const std::filesystem::path path = test::sourceDir() / "tests/session/data" / c.file;
+    ASSERT_TRUE(std::filesystem::exists(path)) << path;
+    try {
+      session::loadSession(path);
+      ADD_FAILURE() << c.file << " loaded";
+    } catch (const Error& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(path.string() + ":byte ", 0), 0u) << what;
+      EXPECT_NE(what.find(c.message), std::string::npos) << what;
+    }
+  }
+}
+
 TEST(SessionState, WritesAreCrashSafe) {
   auto dir = test::scratchDir();
   auto a = test::makeSession(test::sessionScene(test::kClimbPlant));

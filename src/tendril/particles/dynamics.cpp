@@ -72,9 +72,30 @@ void ParticleWorld::applyAnchors(const env::Environment& env) {
   }, 512);
 }
 
-void ParticleWorld::shapeMatch() {
-  const size_t n = capacity();
+// Every piece's particles breadth first from its root, children in link order: each entry's
+// slot, its parent's entry and its children's range of entries, and the pieces' starts.
+void ParticleWorld::buildPieceOrder(std::vector<uint32_t>& start, std::vector<uint32_t>& order,
+                                    std::vector<uint32_t>& parent, std::vector<uint32_t>& childBegin,
+                                    std::vector<uint32_t>& childEnd) const {
+  start.clear(), order.clear(), parent.clear(), childBegin.clear(), childEnd.clear();
+  for (uint32_t r = 0; r < capacity(); ++r) {
+    if (!(flags_[r] & kActive) || parent_[r] != kNone) continue;
+    start.push_back(uint32_t(order.size()));
+    order.push_back(r);
+    parent.push_back(kNone);
+    for (size_t k = order.size() - 1; k < order.size(); ++k) {
+      childBegin.push_back(uint32_t(order.size()));
+      for (uint32_t c = firstChild_[order[k]]; c != kNone; c = nextSibling_[c]) {
+        order.push_back(c);
+        parent.push_back(uint32_t(k));
+      }
+      childEnd.push_back(uint32_t(order.size()));
+    }
+  }
+  start.push_back(uint32_t(order.size()));
+}
 
+void ParticleWorld::shapeMatch() {
   // Every connected piece (a plant, or a piece broken off it) is matched on its own, from its
   // root outward (Gauss–Seidel): a group is fitted once its parent has reached its goal, so the
   // root's hold reaches the tips within one pass instead of creeping outward over many steps.
@@ -84,26 +105,7 @@ void ParticleWorld::shapeMatch() {
   // independent of the thread count.
   if (pieceOrderVersion_ != topologyVersion_) {
     pieceOrderVersion_ = topologyVersion_;
-    pieceStart_.clear();
-    pieceOrder_.clear();
-    matchParent_.clear();
-    matchChildBegin_.clear();
-    matchChildEnd_.clear();
-    for (uint32_t r = 0; r < n; ++r) {
-      if (!(flags_[r] & kActive) || parent_[r] != kNone) continue;
-      pieceStart_.push_back(uint32_t(pieceOrder_.size()));
-      pieceOrder_.push_back(r);
-      matchParent_.push_back(kNone);
-      for (size_t k = pieceOrder_.size() - 1; k < pieceOrder_.size(); ++k) {
-        matchChildBegin_.push_back(uint32_t(pieceOrder_.size()));
-        for (uint32_t c = firstChild_[pieceOrder_[k]]; c != kNone; c = nextSibling_[c]) {
-          pieceOrder_.push_back(c);
-          matchParent_.push_back(uint32_t(k));
-        }
-        matchChildEnd_.push_back(uint32_t(pieceOrder_.size()));
-      }
-    }
-    pieceStart_.push_back(uint32_t(pieceOrder_.size()));
+    buildPieceOrder(pieceStart_, pieceOrder_, matchParent_, matchChildBegin_, matchChildEnd_);
   }
   const size_t count = pieceOrder_.size();
   matchNode_.resize(count);

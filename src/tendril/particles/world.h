@@ -273,6 +273,8 @@ class ParticleWorld {
     Vec3 anchor = Vec3::Zero();
     uint32_t parent = kNone, childBegin = 0, childEnd = 0;  // in piece order
   };
+  void buildPieceOrder(std::vector<uint32_t>& start, std::vector<uint32_t>& order, std::vector<uint32_t>& parent,
+                       std::vector<uint32_t>& childBegin, std::vector<uint32_t>& childEnd) const;
   std::vector<uint32_t> pieceStart_, pieceOrder_;  // piece order: slot of each entry, pieces' starts
   std::vector<uint32_t> matchParent_, matchChildBegin_, matchChildEnd_;
   std::vector<MatchNode> matchNode_;

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 namespace tendril::particles {
 
 namespace {
@@ -143,6 +145,68 @@ void ParticleWorld::loadState(ArchiveReader& in) {
   for (uint32_t f : freeList_)
     if (f >= cap) in.fail("the free list of the saved world lies outside the world");
   if (!link(dragParticle_)) in.fail("the dragged particle of the saved world lies outside the world");
+  // The links form a forest: every child list ends and names children whose parent is its
+  // owner, and no particle is its own ancestor (a cycle would loop the next step for ever).
+  for (size_t i = 0; i < cap; ++i) {
+    size_t children = 0;
+    for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c])
+      if (++children > cap || parent_[c] != i)
+        in.fail(fmt::format("the children of particle {} of the saved world are not linked back to it", i));
+  }
+  {
+    std::vector<uint8_t> state(cap, 0);  // 1: on the path being walked, 2: known to reach a root
+    std::vector<uint32_t> path;
+    for (size_t i = 0; i < cap; ++i) {
+      path.clear();
+      uint32_t j = uint32_t(i);
+      while (j != kNone && state[j] != 2) {
+        if (state[j] == 1) in.fail(fmt::format("particle {} of the saved world is its own ancestor", j));
+        state[j] = 1;
+        path.push_back(j);
+        j = parent_[j];
+      }
+      for (uint32_t k : path) state[k] = 2;
+    }
+  }
+  // Values the next step turns into cell indices or divides by: finite and within reach for
+  // every particle in use (a kilometre of ivy is far beyond any scene).
+  constexpr float kFar = 1e5f;
+  auto finite = [&](const Vec3& p) { return isFinite(p) && p.cwiseAbs().maxCoeff() <= kFar; };
+  auto unit = [](const Quat& q) { return std::isfinite(q.squaredNorm()) && std::abs(q.squaredNorm() - 1.0f) < 1e-2f; };
+  for (size_t i = 0; i < cap; ++i) {
+    if (!(flags_[i] & kActive)) continue;
+    if (!finite(x_[i]) || !finite(xp_[i]) || !finite(v_[i]) || !finite(w_[i]) || !finite(xr_[i]) || !unit(q_[i]) ||
+        !unit(qp_[i]) || !unit(qr_[i]) || !(a_[i] >= 0.0f && a_[i] <= kFar) || !(b_[i] >= 0.0f && b_[i] <= kFar) ||
+        !(m_[i] > 0.0f && m_[i] <= kFar) || !std::isfinite(age_[i]))
+      in.fail(fmt::format("particle {} of the saved world holds a value out of range", i));
+  }
+  // The caches: the spatial hash of the last collision pass (a power-of-two table, ascending
+  // starts, entries in the world), and the light occlusion grid (as many cells as its size).
+  if (!hashStart_.empty()) {
+    const size_t table = hashStart_.size() - 1;
+    bool ok = table >= 1 && (table & (table - 1)) == 0 && hashStart_.front() == 0 &&
+              hashStart_.back() == hashEntries_.size() && hashInv_ > 0.0f && hashInv_ <= 1e4f;
+    for (size_t t = 0; ok && t < table; ++t) ok = hashStart_[t] <= hashStart_[t + 1];
+    for (size_t e = 0; ok && e < hashEntries_.size(); ++e) ok = hashEntries_[e] < cap;
+    if (!ok) in.fail("the spatial hash of the saved world is damaged");
+  } else if (!hashEntries_.empty()) {
+    in.fail("the spatial hash of the saved world is damaged");
+  }
+  if (!occlusion_.density.empty()) {
+    const Eigen::Vector3i d = occlusion_.dims;
+    if ((d.array() < 1).any() || double(d.x()) * d.y() * d.z() != double(occlusion_.density.size()) ||
+        !finite(occlusion_.origin) || !(occlusion_.cell >= 1e-3f && occlusion_.cell <= kFar))
+      in.fail("the light occlusion grid of the saved world is damaged");
+  }
+  // The order in which shape matching visits the pieces follows from the links: when it is
+  // marked current, it must be what they give (it is indexed without further checks).
+  if (pieceOrderVersion_ == topologyVersion_) {
+    std::vector<uint32_t> start, order, parent, begin, end;
+    buildPieceOrder(start, order, parent, begin, end);
+    if (start != pieceStart_ || order != pieceOrder_ || parent != matchParent_ || begin != matchChildBegin_ ||
+        end != matchChildEnd_)
+      in.fail("the shape-matching order of the saved world does not follow its links");
+  }
   clearanceEnv_ = nullptr;
 }
 
