@@ -28,6 +28,16 @@ TEST(JsonReader, NumberOverflowNamesLineAndColumn) {
   EXPECT_NE(msg.find("1e999"), std::string::npos) << msg;
 }
 
+// Coordinates without a range of their own stay within 100 km of the origin: 4e201 would be
+// infinite as a float, 1e30 would overflow the simulations' cell indices (found by fuzzing).
+TEST(JsonReader, CoordinatesStayWithinTheWorld) {
+  const Json j = parseJson(R"({"near": [1e5, -1e5, 0], "far": [0, 4e201, 0], "huge": [1e30, 0, 0]})", "s.json");
+  JsonObject o(j, "s.json");
+  EXPECT_EQ(o.vec3("near", Vec3::Zero()), Vec3(1e5f, -1e5f, 0.0f));
+  EXPECT_EQ(errorOf([&] { o.vec3("far", Vec3::Zero()); }), "s.json:/far/1: must be in [-100000, 100000], got 4e+201");
+  EXPECT_EQ(errorOf([&] { o.vec3("huge", Vec3::Zero()); }).rfind("s.json:/huge/0: must be in", 0), 0u);
+}
+
 TEST(JsonReader, ReadsValuesWithDefaults) {
   Json j = parseJson(R"({"n": 2.5, "i": 3, "b": true, "s": "x", "v": [1,2,3], "a": 90})", "f");
   JsonObject o(j, "f");

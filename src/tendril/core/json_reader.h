@@ -38,6 +38,9 @@ std::string describeJson(const Json& value);
 class JsonObject {
  public:
   static constexpr double kInf = std::numeric_limits<double>::infinity();
+  // Coordinates, sizes and offsets without a range of their own stay within this of the origin:
+  // 100 km (floats keep millimetres there; much beyond, the simulations' cell indices overflow).
+  static constexpr double kWorldExtent = 1e5;
 
   // `json` must outlive this view. Throws Error if it is not an object.
   JsonObject(const Json& json, std::string source, std::string pointer = "");
@@ -70,8 +73,8 @@ class JsonObject {
   // One of `options`; anything else lists them in the error.
   std::string choice(std::string_view key, std::string fallback,
                      std::initializer_list<std::string_view> options);
-  Vec2 vec2(std::string_view key, const Vec2& fallback, double min = -kInf, double max = kInf);
-  Vec3 vec3(std::string_view key, const Vec3& fallback, double min = -kInf, double max = kInf);
+  Vec2 vec2(std::string_view key, const Vec2& fallback, double min = -kWorldExtent, double max = kWorldExtent);
+  Vec3 vec3(std::string_view key, const Vec3& fallback, double min = -kWorldExtent, double max = kWorldExtent);
   Vec3 requiredVec3(std::string_view key);
   // A non-zero 3-vector, returned normalised.
   Vec3 direction(std::string_view key, const Vec3& fallback);

@@ -358,8 +358,9 @@ WorldParams readWorld(ParamReader& r) {
     if (!j->is_array() || j->size() != 3 || !(*j)[0].is_number() || !(*j)[1].is_number() || !(*j)[2].is_number())
       throw Error(where.source, where.pointer, fmt::format("expected [x, y, z], got {}", describeJson(*j)));
     Vec3 v((*j)[0].get<float>(), (*j)[1].get<float>(), (*j)[2].get<float>());
-    if (!isFinite(v) || (direction && !(v.norm() > 1e-6f)))
-      throw Error(where.source, where.pointer, direction ? "must be a non-zero direction" : "must be finite");
+    if (!isFinite(v) || v.cwiseAbs().maxCoeff() > JsonObject::kWorldExtent || (direction && !(v.norm() > 1e-6f)))
+      throw Error(where.source, where.pointer,
+                  direction ? "must be a non-zero direction" : "must be finite and within 100 km of the origin");
     return direction ? Vec3(v.normalized()) : v;
   };
   p.cylinderCenter = fixed("cylinder_center", Vec3::Zero(), false);

@@ -543,7 +543,9 @@ Edit readEdit(JsonObject& o) {
       if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number())
         throw Error(o.source(), ptr, "expected [x, y, z], got " + describeJson(p));
       Vec3 v(p[0].get<float>(), p[1].get<float>(), p[2].get<float>());
-      if (!isFinite(v)) throw Error(o.source(), ptr, "point is not finite");
+      if (!isFinite(v) || v.cwiseAbs().maxCoeff() > JsonObject::kWorldExtent)
+        throw Error(o.source(), ptr,
+                    fmt::format("point must be finite and within {} m of the origin", JsonObject::kWorldExtent));
       e.stroke.points.push_back(v);
     }
     return e;

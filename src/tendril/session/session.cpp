@@ -476,6 +476,28 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
     in.vector(s.points);
   }
   env::WindSettings wind = loadWind(in);
+  // What the scene format would refuse is refused here too (scene.cpp): an obstacle moved past
+  // the world's extent, a light or stroke out of range. Edits only make such values from
+  // checked input.
+  {
+    auto near = [](const Vec3& p) { return isFinite(p) && p.cwiseAbs().maxCoeff() <= JsonObject::kWorldExtent; };
+    auto unit = [](const Quat& q) { return std::isfinite(q.squaredNorm()) && std::abs(q.squaredNorm() - 1.0f) < 1e-2f; };
+    for (size_t o = 0; o < obstacles; ++o)
+      if (!near(transforms[o].translation) || !unit(transforms[o].rotation))
+        in.fail(obstaclesAt, fmt::format("obstacle {} of the saved environment has a bad position or rotation", o));
+    for (const env::Light& l : lights)
+      if (uint32_t(l.type) > uint32_t(env::Light::Type::Point) || !near(l.position) || !near(l.direction) ||
+          !(l.direction.norm() > 1e-6f) || !(l.intensity >= 0.0f && l.intensity <= 1e6f) ||
+          !(l.angularRadius >= 0.0f && l.angularRadius <= radians(45.0f) * 1.0001f) || l.samples < 1 ||
+          l.samples > 256)
+        in.fail("a light of the saved environment is out of range");
+    for (const env::Stroke& st : strokes) {
+      bool ok = st.radius >= 1e-4f && st.radius <= 1e3f && st.strength >= 0.0f && st.strength <= 100.0f &&
+                !st.points.empty();
+      for (const Vec3& q : st.points) ok = ok && near(q);
+      if (!ok) in.fail("a painted stroke of the saved environment is out of range");
+    }
+  }
 
   // Systems made afresh for the saved plants (seeded in an empty world: their seeds are not
   // checked against obstacles that may have moved since), then given their saved state.
