@@ -4,6 +4,7 @@
 #include "studio_impl.h"
 
 #include "tendril/core/error.h"
+#include "tendril/core/json_reader.h"
 #include "tendril/graph/graph_model.h"
 #include "tendril/lsystem/lsystem_model.h"
 #include "tendril/particles/world.h"
@@ -34,8 +35,10 @@ Vec3 degreesFromQuat(const Quat& q) {
 }
 
 bool editVec3(const char* label, Vec3& v, float speed, const char* format = "%.3f") {
+  // Within the world the readers accept (100 km of the origin; typed values are clamped too).
+  const float extent = float(JsonObject::kWorldExtent);
   float values[3] = {v.x(), v.y(), v.z()};
-  ImGui::DragFloat3(label, values, speed, 0.0f, 0.0f, format);
+  ImGui::DragFloat3(label, values, speed, -extent, extent, format, ImGuiSliderFlags_AlwaysClamp);
   v = Vec3(values[0], values[1], values[2]);
   return ImGui::IsItemDeactivatedAfterEdit();
 }
@@ -462,7 +465,7 @@ void Studio::Impl::drawLightPanel(uint32_t index) {
   } else {
     changed |= editVec3("position (m)", l.position, 0.01f);
   }
-  ImGui::SliderFloat("intensity", &l.intensity, 0.0f, 4.0f);
+  ImGui::SliderFloat("intensity", &l.intensity, 0.0f, 4.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
   changed |= ImGui::IsItemDeactivatedAfterEdit();
   ImGui::PopItemWidth();
   if (changed) apply(session::MoveLight{index, l});
@@ -481,14 +484,14 @@ void Studio::Impl::drawEmitterPanel(uint32_t index) {
   changed |= editVec3("direction", e.direction, 0.01f);
   if (e.direction.squaredNorm() > 1e-8f) e.direction.normalize();
   else e.direction = emitters[index].direction;
-  ImGui::SliderFloat("speed (m/s)", &e.speed, 0.0f, 30.0f);
+  ImGui::SliderFloat("speed (m/s)", &e.speed, 0.0f, 30.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
   changed |= ImGui::IsItemDeactivatedAfterEdit();
-  ImGui::SliderFloat("radius (m)", &e.radius, 0.01f, 5.0f);
+  ImGui::SliderFloat("radius (m)", &e.radius, 0.01f, 5.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
   changed |= ImGui::IsItemDeactivatedAfterEdit();
-  ImGui::SliderFloat("reach (m)", &e.reach, 0.1f, 50.0f);
+  ImGui::SliderFloat("reach (m)", &e.reach, 0.1f, 50.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
   changed |= ImGui::IsItemDeactivatedAfterEdit();
   float spread = e.spread * 180.0f / kPi;
-  ImGui::SliderFloat("spread (deg)", &spread, 0.0f, 45.0f);
+  ImGui::SliderFloat("spread (deg)", &spread, 0.0f, 45.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
   e.spread = spread * kPi / 180.0f;
   changed |= ImGui::IsItemDeactivatedAfterEdit();
   ImGui::PopItemWidth();

@@ -134,6 +134,29 @@ TEST(SessionState, DamagedSessionFilesAreErrorsNotCrashes) {
   }
 }
 
+// What edits may make is read back: edit scripts allow wider emitters than scenes (500 m/s, an
+// 80° spread) and keep their direction as given, so the saved wind's checks must accept them.
+TEST(SessionState, EmittersEditsMayMakeAreReadBack) {
+  const std::string json = test::sessionScene(test::kClimbPlant);
+  auto a = test::makeSession(json);
+  session::Editor editor(*a);
+  editor.step(2);
+  session::AddEmitter add;
+  add.emitter.position = Vec3(0.1f, 0.5f, 0.2f);
+  add.emitter.direction = Vec3(2.0f, 0.0f, 0.5f);
+  add.emitter.speed = 500.0f;
+  add.emitter.radius = 400.0f;
+  add.emitter.reach = 1e5f;
+  add.emitter.spread = radians(80.0f);
+  add.emitter.rate = 1e8f;
+  editor.apply(add);
+  editor.step(2);
+  const std::vector<uint8_t> state = a->saveState();
+  auto b = test::makeSession(json);
+  EXPECT_NO_THROW(b->loadState(state));
+  EXPECT_EQ(b->saveState(), state);
+}
+
 // Sessions the session fuzzer (fuzz/README.md) damaged in ways the reader missed: a particle
 // world whose saved spatial hash points past its entries (a heap overflow in the next step's
 // crowding query), air with a finite speed of 1e37 m/s (NaN positions in the next step), and a

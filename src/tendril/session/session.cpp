@@ -33,16 +33,19 @@ env::WindSettings loadWind(ArchiveReader& in) {
   w.gustStrength = in.f32(), w.gustPeriod = in.f32(), w.gustScale = in.f32(), w.gustTurn = in.f32();
   w.seed = in.u64();
   in.vector(w.emitters);
-  // The ranges the scene format allows (scene.cpp, readWind).
+  // The ranges the scene format allows for the wind (scene.cpp, readWind), and for emitters
+  // those of the scene format or of edit scripts (edit.cpp, readEmitter), whichever is wider.
   auto within = [](float v, float lo, float hi) { return v >= lo && v <= hi; };
   const float maxAngle = radians(90.0f) * 1.0001f;
   if (!isFinite(w.velocity) || w.velocity.cwiseAbs().maxCoeff() > 200.0f || !within(w.gustStrength, 0.0f, 1.0f) ||
       !within(w.gustPeriod, 0.05f, 3600.0f) || !within(w.gustScale, 0.01f, 1e4f) || !within(w.gustTurn, 0.0f, maxAngle))
     in.fail(at, "the saved wind's settings are out of range");
+  const float extent = float(JsonObject::kWorldExtent);
   for (const env::WindEmitter& e : w.emitters)
-    if (!isFinite(e.position) || !(std::abs(e.direction.squaredNorm() - 1.0f) < 1e-4f) ||
-        !within(e.speed, 0.0f, 200.0f) || !within(e.radius, 0.001f, 100.0f) || !within(e.reach, 0.01f, 1e4f) ||
-        !within(e.spread, 0.0f, radians(45.0f) * 1.0001f) || !within(e.rate, 0.0f, 1e7f))
+    if (!isFinite(e.position) || e.position.cwiseAbs().maxCoeff() > extent || !isFinite(e.direction) ||
+        !(e.direction.norm() > 1e-6f) || e.direction.cwiseAbs().maxCoeff() > extent || !within(e.speed, 0.0f, 1000.0f) ||
+        !within(e.radius, 1e-4f, 1000.0f) || !within(e.reach, 0.0f, 1e6f) || !within(e.spread, 0.0f, maxAngle) ||
+        !within(e.rate, 0.0f, 1e9f))
       in.fail(at, "a saved wind emitter is out of range");
   return w;
 }
