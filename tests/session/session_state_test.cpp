@@ -159,15 +159,17 @@ TEST(SessionState, EmittersEditsMayMakeAreReadBack) {
 
 // Sessions the session fuzzer (fuzz/README.md) damaged in ways the reader missed: a particle
 // world whose saved spatial hash points past its entries (a heap overflow in the next step's
-// crowding query), air with a finite speed of 1e37 m/s (NaN positions in the next step), and a
-// painted stroke 10²⁵ m away (an overflowing cell index).
+// crowding query), air with a finite speed of 1e37 m/s (NaN positions in the next step), a
+// painted stroke 10²⁵ m away and a climbing plant's node 3·10³² m away (overflowing cell
+// indices).
 TEST(SessionState, DamagedStatesFoundByFuzzingAreErrors) {
   const struct {
     const char* file;
     const char* message;
   } cases[] = {{"fuzz-world-hash.tses", "the spatial hash of the saved world is damaged"},
                {"fuzz-air-speed.tses", "the saved air's particle 122 is damaged"},
-               {"fuzz-stroke-far.tses", "a painted stroke of the saved environment is out of range"}};
+               {"fuzz-stroke-far.tses", "a painted stroke of the saved environment is out of range"},
+               {"fuzz-climb-far.tses", "a node of a saved climbing plant ends out of range"}};
   for (const auto& c : cases) {
     const std::filesystem::path path = test::sourceDir() / "tests/session/data" / c.file;
     ASSERT_TRUE(std::filesystem::exists(path)) << path;

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 namespace tendril::climb {
 
 namespace {
@@ -56,6 +58,18 @@ void ClimbSystem::loadState(ArchiveReader& in) {
       if (b > step_) in.fail("a node of a saved climbing plant was born after the saved step");
     for (const Tip& t : p->tips)
       if (t.lastNode < -1 || t.lastNode >= int32_t(nodes)) in.fail("a tip of a saved climbing plant has no node");
+    // Positions the occupancy grid turns into cell indices and tips grow from: finite and
+    // within the world (100 km of the origin).
+    constexpr float kFar = 1e5f;
+    auto near = [](const Vec3& v) { return isFinite(v) && v.cwiseAbs().maxCoeff() <= kFar; };
+    for (const Vec3& e : p->nodeEnd)
+      if (!near(e)) in.fail("a node of a saved climbing plant ends out of range");
+    for (const Tip& t : p->tips)
+      if (!near(t.position) || !near(t.dir) || !near(t.normal) || !near(t.shootStart) || !std::isfinite(t.length) ||
+          !std::isfinite(t.radius) || !std::isfinite(t.leafSize) || !std::isfinite(t.leafThickness) ||
+          !std::isfinite(t.windAngle) ||
+          (t.support && (!near(t.support->point) || !near(t.support->normal) || !near(t.support->away))))
+        in.fail("a tip of a saved climbing plant holds a value out of range");
   }
   rebuildOccupancy();
 }

@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 namespace tendril::plant {
 
 namespace {
@@ -95,6 +97,20 @@ void loadPlantModel(ArchiveReader& in, PlantModel& p) {
   for (const Primitive& pr : p.primitives)
     if (pr.node < -1 || pr.node >= int32_t(n) || pr.mesh >= p.meshes.size())
       in.fail("a primitive of a saved plant refers to a missing node or mesh");
+  // Values the models turn into cell indices or sweep into meshes: finite, within the world
+  // (100 km of the origin), rotations of unit length.
+  constexpr float kFar = 1e5f;
+  auto near = [](const Vec3& v) { return isFinite(v) && v.cwiseAbs().maxCoeff() <= kFar; };
+  auto unit = [](const Quat& q) { return std::isfinite(q.squaredNorm()) && std::abs(q.squaredNorm() - 1.0f) < 1e-2f; };
+  auto size = [](float v) { return v >= 0.0f && v <= kFar; };
+  for (size_t i = 0; i < n; ++i)
+    if (!near(p.position[i]) || !unit(p.orientation[i]) || !size(p.length[i]) || !size(p.radius[i]) ||
+        !std::isfinite(p.age[i]))
+      in.fail(fmt::format("node {} of a saved plant holds a value out of range", i));
+  for (size_t i = 0; i < l; ++i)
+    if (!near(p.leafOffset[i]) || !unit(p.leafRotation[i]) || !size(p.leafSize[i]) || !size(p.leafThickness[i]) ||
+        !size(p.leafPetiole[i]) || (!p.leafMotion.empty() && !isFinite(p.leafMotion[i])))
+      in.fail(fmt::format("leaf {} of a saved plant holds a value out of range", i));
 }
 
 }  // namespace tendril::plant
