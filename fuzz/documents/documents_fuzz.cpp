@@ -9,10 +9,9 @@
 // The work an input may ask for is what a user may ask for, so a document that legitimately
 // asks for a lot (a million air particles, a hundred-metre SDF) is slow here: such inputs are
 // cut short by the size caps below rather than reported as hangs.
+#include "../fuzz_init.h"
 #include "tendril/core/error.h"
 #include "tendril/core/json_reader.h"
-#include "tendril/core/log.h"
-#include "tendril/core/parallel.h"
 #include "tendril/graph/build_plant.h"
 #include "tendril/graph/graph.h"
 #include "tendril/plant/plant_model.h"
@@ -84,12 +83,6 @@ void readEditScript(const Json& json) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static const bool quiet = [] {
-    log::setLevel(log::Level::Off);
-    setThreadCount(1);
-    return true;
-  }();
-  (void)quiet;
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   Json json;
   try {

@@ -2,9 +2,8 @@
 // that compile are derived for a few steps within small limits and drawn. Every problem in the
 // input must be a tendril::Error — anything else (a crash, a hang, a leak, a sanitizer report,
 // or a turtle drawing an invalid PlantModel) is a bug. Run with `make fuzz`.
+#include "../fuzz_init.h"
 #include "tendril/core/error.h"
-#include "tendril/core/log.h"
-#include "tendril/core/parallel.h"
 #include "tendril/lsystem/lsystem.h"
 
 #include <algorithm>
@@ -15,12 +14,6 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace tendril;
-  static const bool quiet = [] {
-    log::setLevel(log::Level::Off);
-    setThreadCount(1);
-    return true;
-  }();
-  (void)quiet;
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   plant::PlantModel plant;
   try {

@@ -4,9 +4,8 @@
 // file; a session that loads is stepped once, saved and loaded again, which must succeed —
 // anything else (a crash, a hang, a leak, a sanitizer report, another exception) is a bug.
 // Run with `make fuzz`; the seed corpus is written by `fuzz/session/make-corpus.sh`.
+#include "../fuzz_init.h"
 #include "tendril/core/error.h"
-#include "tendril/core/log.h"
-#include "tendril/core/parallel.h"
 #include "tendril/session/session.h"
 #include "tendril/session/session_file.h"
 
@@ -39,12 +38,6 @@ std::filesystem::path scratch(const char* name) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace tendril;
-  static const bool quiet = [] {
-    log::setLevel(log::Level::Off);
-    setThreadCount(1);
-    return true;
-  }();
-  (void)quiet;
   const std::filesystem::path input = scratch("input.tses"), again = scratch("again.tses");
   {
     std::ofstream out(input, std::ios::binary | std::ios::trunc);
