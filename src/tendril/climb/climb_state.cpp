@@ -2,6 +2,7 @@
 #include "tendril/climb/climb_system.h"
 
 #include "tendril/core/error.h"
+#include "tendril/core/json_reader.h"
 #include "tendril/plant/plant_archive.h"
 
 #include <fmt/format.h>
@@ -60,7 +61,7 @@ void ClimbSystem::loadState(ArchiveReader& in) {
       if (t.lastNode < -1 || t.lastNode >= int32_t(nodes)) in.fail("a tip of a saved climbing plant has no node");
     // Positions the occupancy grid turns into cell indices and tips grow from: finite and
     // within the world (100 km of the origin).
-    constexpr float kFar = 1e5f;
+    constexpr float kFar = float(JsonObject::kWorldExtent);  // the readers' world
     auto near = [](const Vec3& v) { return isFinite(v) && v.cwiseAbs().maxCoeff() <= kFar; };
     for (const Vec3& e : p->nodeEnd)
       if (!near(e)) in.fail("a node of a saved climbing plant ends out of range");

@@ -3,6 +3,7 @@
 #include "tendril/particles/world.h"
 
 #include "tendril/core/error.h"
+#include "tendril/core/json_reader.h"
 
 #include <fmt/format.h>
 
@@ -170,7 +171,7 @@ void ParticleWorld::loadState(ArchiveReader& in) {
   }
   // Values the next step turns into cell indices or divides by: finite and within reach for
   // every particle in use (a kilometre of ivy is far beyond any scene).
-  constexpr float kFar = 1e5f;
+  constexpr float kFar = float(JsonObject::kWorldExtent);  // the readers' world
   auto finite = [&](const Vec3& p) { return isFinite(p) && p.cwiseAbs().maxCoeff() <= kFar; };
   auto unit = [](const Quat& q) { return std::isfinite(q.squaredNorm()) && std::abs(q.squaredNorm() - 1.0f) < 1e-2f; };
   for (size_t i = 0; i < cap; ++i) {

@@ -1,5 +1,7 @@
 #include "tendril/plant/plant_archive.h"
 
+#include "tendril/core/json_reader.h"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -99,7 +101,7 @@ void loadPlantModel(ArchiveReader& in, PlantModel& p) {
       in.fail("a primitive of a saved plant refers to a missing node or mesh");
   // Values the models turn into cell indices or sweep into meshes: finite, within the world
   // (100 km of the origin), rotations of unit length.
-  constexpr float kFar = 1e5f;
+  constexpr float kFar = float(JsonObject::kWorldExtent);  // the readers' world
   auto near = [](const Vec3& v) { return isFinite(v) && v.cwiseAbs().maxCoeff() <= kFar; };
   auto unit = [](const Quat& q) { return std::isfinite(q.squaredNorm()) && std::abs(q.squaredNorm() - 1.0f) < 1e-2f; };
   auto size = [](float v) { return v >= 0.0f && v <= kFar; };
