@@ -62,6 +62,7 @@ INSTANTIATE_TEST_SUITE_P(Models, SessionStateTest,
                                            ModelCase{"lsystem", test::kLSystemPlant, ""},
                                            ModelCase{"graph", test::kGraphPlant, ""},
                                            ModelCase{"sph", test::kParticlePlant, test::kSphWind},
+                                           ModelCase{"sphPositionBased", test::kParticlePlant, test::kSphWindPositionBased},
                                            ModelCase{"all", test::kClimbPlant + "," + test::kParticlePlant + "," +
                                                                 test::kLSystemPlant + "," + test::kGraphPlant,
                                                      ""}),

@@ -32,6 +32,11 @@ inline const std::string kGraphPlant =
 inline const std::string kSphWind = R"({"mode": "sph", "velocity": [0.5, 0, 0],
     "emitters": [{"position": [-0.5, 0.3, 0.2], "direction": [1, 0, 0], "speed": 2, "radius": 0.1}],
     "sph": {"domain_min": [-0.6, 0.0, 0.0], "domain_max": [0.6, 0.6, 0.5], "spacing": 0.06}})";
+// The same air with the position-based solver (its pressures are part of the saved state).
+inline const std::string kSphWindPositionBased = R"({"mode": "sph", "velocity": [0.5, 0, 0],
+    "emitters": [{"position": [-0.5, 0.3, 0.2], "direction": [1, 0, 0], "speed": 2, "radius": 0.1}],
+    "sph": {"domain_min": [-0.6, 0.0, 0.0], "domain_max": [0.6, 0.6, 0.5], "spacing": 0.06,
+            "solver": "position-based"}})";
 
 inline std::unique_ptr<session::Session> makeSession(const std::string& json, const std::string& source = "test.json") {
   Json doc = parseJson(json, source);

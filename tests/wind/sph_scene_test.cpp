@@ -63,6 +63,20 @@ TEST(SphScene, SettingsAreChecked) {
   for (int f = 0; f < 6; ++f) EXPECT_EQ(tunnel.sph.closed(f), f != 1) << f;
   EXPECT_TRUE(parse(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1], "boundary": "closed"}})")
                   .sph.allClosed());
+  // The solver and its iterations.
+  const scene::Scene pbf =
+      parse(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1], "solver": "position-based",
+                "iterations": 4}})");
+  EXPECT_EQ(pbf.sph.solver, wind::SphSolver::PositionBased);
+  EXPECT_EQ(pbf.sph.iterations, 4);
+  EXPECT_EQ(parse(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1]}})").sph.solver,
+            wind::SphSolver::WeaklyCompressible);
+  EXPECT_NE(message(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1], "solver": "implicit"}})")
+                .find("/environment/wind/sph/solver"),
+            std::string::npos);
+  EXPECT_NE(message(R"({"mode": "sph", "sph": {"domain_min": [0,0,0], "domain_max": [1,1,1], "iterations": 0}})")
+                .find("/environment/wind/sph/iterations"),
+            std::string::npos);
 }
 
 // What only the air itself can check — an emitter outside its domain, a domain of too many

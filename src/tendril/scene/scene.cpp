@@ -108,6 +108,10 @@ wind::SphSettings readSph(JsonObject& o, bool* fill) {
   s.restDensity = o.numberf("rest_density", s.restDensity, 1.2, 1.4);
   s.viscosity = o.numberf("viscosity", s.viscosity, 0.0, 10.0);
   s.soundSpeed = o.numberf("sound_speed", s.soundSpeed, 0.1, 1000.0);
+  s.solver = o.choice("solver", "weakly-compressible", {"weakly-compressible", "position-based"}) == "position-based"
+                 ? wind::SphSolver::PositionBased
+                 : wind::SphSolver::WeaklyCompressible;
+  s.iterations = int(o.integer("iterations", s.iterations, 1, 50));
   // "boundary": one kind for every face, or an object naming faces ("-x" … "+z"; the others
   // outflow).
   auto kind = [](const std::string& k) { return k == "closed" ? wind::SphBoundary::Closed : wind::SphBoundary::Outflow; };

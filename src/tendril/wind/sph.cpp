@@ -219,6 +219,16 @@ struct SphAir::Grid {
   // buffer. And how many plant particles' supports hold the particle (for the benchmark).
   std::vector<std::vector<uint32_t>> nbrBlocks;
   std::vector<uint32_t> nbrBegin, nbrCount, hitCount;
+  // The position-based solver's (SphSolver::PositionBased) per substep: the constraint's
+  // multiplier λ's sum over the iterations, how far the projections moved the particle,
+  // the plants' density and constraint gradient (fixed over a substep: the plants do not move
+  // and the air moves a fraction of their support), the walls' and plants' part of ∇C,
+  // |∇W_ij|/r per listed neighbour (the λ pass's, for the projection at the same positions)
+  // and (x, y, z, λ) as the λ pass writes it for the projection (which writes packedX).
+  std::vector<float> lambdaSum, plantRho;
+  std::vector<std::vector<float>> pairBlocks;  // as nbrBlocks
+  std::vector<Vec3> shift, plantGrad, extGrad;
+  std::vector<V4f> packedX2;
 
   size_t size() const { return order.size(); }
   int cellAxis(float v, int k) const { return std::clamp(int(std::floor((v - origin[k]) * inv[k])), 0, dims[k] - 1); }
@@ -401,6 +411,30 @@ SphAir::SphAir(const SphSettings& settings) : settings_(settings) {
       }
   mass_ = float(settings_.restDensity / (norm6 * lattice));
 
+  // The position-based solver's constants from the same lattice: the constraint's denominator
+  // at rest, D = V² Σ |∇W|² (Σ ∇W = 0 there), is its relaxation ε, which halves a projection
+  // in the bulk. Jacobi projections overshoot without it — a particle moves for its own
+  // constraint and for each neighbour's, which in a uniform compression doubles the step —
+  // and still air starts to oscillate within 0.1 s (ε = 0.01 D: 56% density error, the
+  // speed clamp reached; 0.3 D and 0.5 D: 4–8% after 2 s). It also sets the artificial
+  // pressure's scale, k = 0.1/D at Δq = 0.2 h (PBF eq. 13 and §4).
+  {
+    const double volume = mass_ / settings_.restDensity, spikyH = kSpiky / std::pow(double(h_), 6.0);
+    double sum = 0.0;
+    for (int z = -reach; z <= reach; ++z)
+      for (int y = -reach; y <= reach; ++y)
+        for (int x = -reach; x <= reach; ++x) {
+          const double r = std::sqrt(double(x * x + y * y + z * z)) * s;
+          if (r <= 0.0 || r >= h_) continue;
+          const double g = spikyH * (h_ - r) * (h_ - r);
+          sum += g * g;
+        }
+    const double rest = volume * volume * sum;
+    pbfEps_ = float(rest);
+    pbfCorr_ = float(0.1 / rest);
+    pbfInvWq_ = float(1.0 / std::pow(1.0 - 0.04, 3.0));
+  }
+
   // Wall tables: mirror layers at −(s/2 + k s) behind a wall at 0, the particle at d.
   Walls& w = *walls_;
   w.h = h_;
@@ -484,7 +518,12 @@ SphAir::SphAir(const SphSettings& settings) : settings_(settings) {
   Plants& P = *plants_;
   P.origin = settings_.domainMin;
   P.edge = h_;
-  if (Eigen::Vector3i dims; cellsOf(Vec3::Constant(0.5f * h_), &dims) <= kMaxCells) P.edge = 0.5f * h_;
+  // The position-based solver's two or three substeps do not repay the finer bins' cost
+  // (about five times the entries): cubes of h there (frame 22.8–23.3 → 20.3–21.2 ms in the
+  // benchmark, bench/README.md).
+  if (Eigen::Vector3i dims; settings_.solver == SphSolver::WeaklyCompressible &&
+                            cellsOf(Vec3::Constant(0.5f * h_), &dims) <= kMaxCells)
+    P.edge = 0.5f * h_;
   P.inv = 1.0f / P.edge;
   cellsOf(Vec3::Constant(P.edge), &P.dims);
   g.start.assign(cells + 1, 0);
@@ -505,6 +544,8 @@ void SphAir::validate() const {
   checkRange("dragCoefficient", s.dragCoefficient, 0.0f, 10.0f, "");
   checkRange("dt", s.dt, 1e-6f, 1.0f, "s");
   checkRange("cfl", s.cfl, 0.01f, 1.0f, "");
+  if (s.iterations < 1 || s.iterations > 50)
+    throw settingError("iterations", fmt::format("must be in [1, 50], got {}", s.iterations));
   if (s.maxSubsteps < 1 || s.maxSubsteps > 100000)
     throw settingError("maxSubsteps", fmt::format("must be in [1, 100000], got {}", s.maxSubsteps));
   for (int k = 0; k < 3; ++k) {
@@ -561,6 +602,7 @@ size_t SphAir::addParticle(const Vec3& x, const Vec3& v) {
   x_.push_back(x);
   v_.push_back(v);
   rho_.push_back(settings_.restDensity);
+  p_.push_back(0.0f);
   sdfBudget_.push_back(-kInf);  // unknown: queried before the next density pass
   sdf_.push_back(kInf);
   sdfNormal_.push_back(Vec3::Zero());
@@ -658,13 +700,13 @@ void SphAir::removeDead() {
   for (size_t i = 0; i < x_.size(); ++i) {
     if (dead_[i]) continue;
     if (out != i) {
-      x_[out] = x_[i], v_[out] = v_[i], rho_[out] = rho_[i];
+      x_[out] = x_[i], v_[out] = v_[i], rho_[out] = rho_[i], p_[out] = p_[i];
       sdfBudget_[out] = sdfBudget_[i], sdf_[out] = sdf_[i], sdfNormal_[out] = sdfNormal_[i];
       dead_[out] = 0;
     }
     ++out;
   }
-  x_.resize(out), v_.resize(out), rho_.resize(out), sdfBudget_.resize(out), sdf_.resize(out);
+  x_.resize(out), v_.resize(out), rho_.resize(out), p_.resize(out), sdfBudget_.resize(out), sdf_.resize(out);
   sdfNormal_.resize(out), dead_.resize(out);
 }
 
@@ -698,12 +740,14 @@ void SphAir::buildGrid() {
   g.sdfNormal.resize(live), g.acc.resize(live), g.dragAcc.resize(live);
   const float c2 = settings_.soundSpeed * settings_.soundSpeed, rho0 = settings_.restDensity;
   const float background = backgroundPressure();
+  const bool positionBased = settings_.solver == SphSolver::PositionBased;
   parallelFor(0, live, [&](size_t k) {
     const uint32_t i = g.order[k];
     g.px[k] = x_[i].x(), g.py[k] = x_[i].y(), g.pz[k] = x_[i].z();
     g.vx[k] = v_[i].x(), g.vy[k] = v_[i].y(), g.vz[k] = v_[i].z();
     g.rho[k] = rho_[i];
-    g.pressure[k] = std::max(0.0f, c2 * (rho_[i] - rho0) + background);
+    // The position-based solver's pressure comes from its last substep (see substepPositionBased).
+    g.pressure[k] = positionBased ? p_[i] : std::max(0.0f, c2 * (rho_[i] - rho0) + background);
     g.sdf[k] = sdf_[i];
     g.sdfNormal[k] = sdfNormal_[i];
     g.budget[k] = sdfBudget_[i];
@@ -757,6 +801,7 @@ void SphAir::scatterGrid() {
     x_[i] = Vec3(g.px[k], g.py[k], g.pz[k]);
     v_[i] = Vec3(g.vx[k], g.vy[k], g.vz[k]);
     rho_[i] = g.rho[k];
+    p_[i] = g.pressure[k];
     sdfBudget_[i] = g.budget[k];
     sdf_[i] = g.sdf[k];
     sdfNormal_[i] = g.sdfNormal[k];
@@ -872,6 +917,13 @@ struct PassConstants {
   float h = 0, h2 = 0, invH2 = 0, m = 0, rho0 = 0, c2 = 0, background = 0, norm6 = 0, search = 0;
   float kp = 0, kv = 0;  // the pressure and viscosity forces' folded constants
   bool closed = false, hasPlants = false;  // closed: any face of the domain box is a wall
+  // Position-based solver: m/ρ0, 1/ρ0, the spiky gradient's 45/(π h⁶), the relaxation ε of
+  // the constraint's denominator, the artificial pressure's k/(denominator at rest) and
+  // 1/W(Δq) (as (1 − Δq²/h²)³), the particle's rest distance from a wall (s/4).
+  float volume = 0, invRho0 = 0, spikyH = 0, eps = 0, corr = 0, invWq = 0, rmin = 0;
+  // Position-based solver: in a closed domain the constraint also pulls thin air together,
+  // down to a deficit of `tension` (the background pressure's share; 0 with an open face).
+  float tension = 0;
   Vec3 dmin = Vec3::Zero(), dmax = Vec3::Zero();
   // The closed faces' planes; ∓∞ for open ones, so their mirrored lattices add nothing.
   Vec3 wallMin = Vec3::Zero(), wallMax = Vec3::Zero();
@@ -916,6 +968,9 @@ template <class Grid, class Walls>
     if (c.closed) rho += boxGhostDensity(W, Vec3(x, y, z) - c.wallMin, c.wallMax - Vec3(x, y, z));  // walls
     g.rho[k] = rho;
   }
+  // Eight valid indices past the block's last list: the passes read lists eight at a time and
+  // mask off the lanes past a particle's count.
+  std::fill_n(room(buffer, used, 8) + used, 8, 0u);
 }
 
 // Plants add to the density like boundary particles of volume Ψ (eq. 12–13), push the air by
@@ -928,7 +983,9 @@ template <class Grid, class Walls>
 //   a_drag  = (1/m) Σ φ k (v_j − v)⊥,  φ = V W_j / max(Z, ½), V = m/ρ   (the air's share of the
 //             plant particle's drag; Σ φ k / m is the implicit factor)
 // so the sums are gathered first and scaled once ρ and p are known.
-template <class Grid, class Plants>
+// The position-based solver (PositionBased = true) keeps the plants' density ρ0 Σ Ψ W_j and
+// constraint gradient Σ Ψ ∇W_j for its projections instead, and the drag as above.
+template <bool PositionBased, class Grid, class Plants>
 [[gnu::always_inline]] inline void plantBlock(Grid& g, const Plants& P, const PassConstants& c, size_t block) {
   const float rho0 = c.rho0, c2 = c.c2, background = c.background;
   const V4f* packX = P.packX.data();
@@ -977,6 +1034,16 @@ template <class Grid, class Plants>
         dx += kk * rx, dy += kk * ry, dz += kk * rz;
         rate8 += kk;
       }
+      if constexpr (PositionBased) {
+        // Σ Ψ ∇W_j = −45/π Σ Ψ det G (1 − |η|)² G²u/|η|; the drag's share with the density so far.
+        const float plantRho = (rho0 * kPoly6) * total8(sum8), share = kPoly6 / (rho + plantRho);
+        g.plantRho[k] = plantRho;
+        g.plantGrad[k] = -kSpiky * Vec3(total8(sx), total8(sy), total8(sz));
+        g.dragAcc[k] = share * Vec3(total8(dx), total8(dy), total8(dz));
+        g.dragRate[k] = share * total8(rate8);
+        g.hitCount[k] = hits;
+        continue;
+      }
       rho += (rho0 * kPoly6) * total8(sum8);
       const float p = std::max(0.0f, c2 * (rho - rho0) + background);
       const float push = p > 0.0f ? p / rho * kSpiky : 0.0f, share = kPoly6 / rho;
@@ -986,6 +1053,10 @@ template <class Grid, class Plants>
       g.rho[k] = rho;
     }
     g.hitCount[k] = hits;
+    if constexpr (PositionBased) {
+      g.plantRho[k] = 0.0f, g.plantGrad[k] = Vec3::Zero();
+      continue;
+    }
     const float p = std::max(0.0f, c2 * (rho - rho0) + background);
     g.pressure[k] = p;
     g.invRho[k] = 1.0f / rho;
@@ -1014,10 +1085,9 @@ template <class Grid, class Walls>
     const uint32_t count = g.nbrCount[k];
     V8f ax8 = splat8(0.0f), ay8 = ax8, az8 = ax8;
     // Eight neighbours at a time, each one's packed state transposed into lanes; lanes past
-    // the list repeat its last entry and are masked off.
+    // the list (the next particle's entries, or the block's padding) are masked off.
     for (uint32_t q = 0; q < count; q += 8) {
-      uint32_t j[8];
-      for (int l = 0; l < 8; ++l) j[l] = list[std::min(q + uint32_t(l), count - 1)];
+      const uint32_t* j = list + q;  // lanes past the count read the next list or the padding
       V8f px8, py8, pz8, invRho8, pvx8, pvy8, pvz8, pOverRho8;
       transpose8(packedX, j, &px8, &py8, &pz8, &invRho8);
       transpose8(packedV, j, &pvx8, &pvy8, &pvz8, &pOverRho8);
@@ -1038,6 +1108,115 @@ template <class Grid, class Walls>
     if (pk > 0.0f && g.sdf[k] < h) a += wall * W.lookup(W.gradient, g.sdf[k]) * g.sdfNormal[k];
     if (c.hasPlants) a += g.plantAcc[k];  // the plants' pressure push, from the plant pass
     g.acc[k] = a;
+  }
+}
+
+// Position-based solver (Macklin & Müller 2013, "Position Based Fluids", PBF), one Jacobi
+// iteration in two passes over the listed neighbours at the particles' current positions
+// (packedX, (x, y, z, ·)). With V = m/ρ0 and ∇W = ∇W_spiky = −45/(π h⁶)(h − r)² r̂:
+//   C_i   = max(ρ_i/ρ0 − 1, −b) (PBF eq. 1; b the background pressure's share in a closed
+//           domain, 0 with an open face: there air only pushes, as in the equation of state),
+//           ρ_i = Σ_j m W_poly6 + the walls' mirrored lattices + ρ0 Σ_b Ψ W_b (plants)
+//   ∇_i C = V Σ_j ∇W_ij + (walls' g_w n + the box's ghost gradient)/ρ0 + Σ_b Ψ ∇W_b,
+//   ∇_j C = −V ∇W_ij                                                          (PBF eq. 8)
+//   λ_i   = −C_i / (|∇_i C|² + V² Σ_j |∇W_ij|² + ε)                            (PBF eq. 11)
+// then
+//   Δx_i  = V Σ_j (λ_i + λ_j + s_corr) ∇W_ij + λ_i (∇_i C − V Σ_j ∇W_ij)       (PBF eq. 12)
+// the last term the walls' and plants' part (they have no constraint of their own), and
+// s_corr = −k (W(r)/W(Δq))⁴ (PBF eq. 13, in units of a constraint at rest: k/(denominator at
+// rest)) only where the constraint also pulls, against clumping.
+template <class Grid, class Walls>
+[[gnu::always_inline]] inline void lambdaRange(Grid& g, const Walls& W, const PassConstants& c, size_t begin,
+                                               size_t end) {
+  const V4f* packedX = g.packedX.data();
+  const float h = c.h, h2 = c.h2, invH2 = c.invH2, spikyH = c.spikyH;
+  for (size_t k = begin; k < end; ++k) {
+    const V4f xk = packedX[k];
+    const float x = xk[0], y = xk[1], z = xk[2];
+    const V8f x8 = splat8(x), y8 = splat8(y), z8 = splat8(z);
+    const uint32_t* list = g.nbrBlocks[k / kBlock].data() + g.nbrBegin[k];
+    float* pairGrad = g.pairBlocks[k / kBlock].data() + g.nbrBegin[k];
+    const uint32_t count = g.nbrCount[k];
+    V8f d8 = splat8(0.0f), gx8 = d8, gy8 = d8, gz8 = d8, g28 = d8;
+    for (uint32_t q = 0; q < count; q += 8) {
+      const uint32_t* j = list + q;  // lanes past the count read the next list or the padding
+      V8f px8, py8, pz8, unused;
+      transpose8(packedX, j, &px8, &py8, &pz8, &unused);
+      const V8f dx = x8 - px8, dy = y8 - py8, dz = z8 - pz8;
+      const V8f r2 = dx * dx + dy * dy + dz * dz;
+      const V8i live = (kLanes8 < int32_t(count - q)) & (r2 < h2);
+      const V8f t = masked8(live, 1.0f - r2 * invH2);
+      d8 += t * t * t;
+      const V8f r = sqrt8(r2), u = h - r;
+      const V8f gs = masked8(live & (r > 0.0f), spikyH * u * u / r);  // |∇W| / r
+      gx8 -= gs * dx, gy8 -= gs * dy, gz8 -= gs * dz;
+      g28 += gs * gs * r2;
+      // For the projection at the same positions (only this particle's entries: the next
+      // particle's may be another thread's).
+      std::memcpy(pairGrad + q, &gs, sizeof(float) * std::min(count - q, 8u));
+    }
+    const Vec3 p(x, y, z);
+    // The walls at the current position: the box's faces exactly, obstacles by the distance
+    // where the substep's query was, moved along its normal.
+    const float d = g.sdf[k] + g.sdfNormal[k].dot(g.shift[k]);
+    float rho = c.m * c.norm6 * (1.0f + total8(d8)) + W.lookup(W.density, d) + g.plantRho[k];
+    Vec3 wall = W.lookup(W.gradient, d) * g.sdfNormal[k];
+    if (c.closed) {
+      rho += boxGhostDensity(W, p - c.wallMin, c.wallMax - p);
+      wall += boxGhostGradient(W, p - c.wallMin, c.wallMax - p);
+    }
+    const Vec3 ext = c.invRho0 * wall + g.plantGrad[k];
+    const Vec3 grad = c.volume * Vec3(total8(gx8), total8(gy8), total8(gz8)) + ext;
+    const float constraint = std::max(rho * c.invRho0 - 1.0f, -c.tension);
+    const float lambda = -constraint / (grad.squaredNorm() + c.volume * c.volume * total8(g28) + c.eps);
+    g.rho[k] = rho;
+    g.packedX2[k] = V4f{x, y, z, lambda};
+    g.lambdaSum[k] += lambda;
+    g.extGrad[k] = ext;
+  }
+}
+
+// Reads (x, y, z, λ) from packedX2 (lambdaRange's output) and writes the moved positions to
+// packedX.
+template <class Grid>
+[[gnu::always_inline]] inline void deltaRange(Grid& g, const PassConstants& c, size_t begin, size_t end) {
+  const V4f* packed = g.packedX2.data();
+  const float h2 = c.h2, invH2 = c.invH2, corr = c.corr, invWq = c.invWq;
+  const bool pulls = c.tension > 0.0f;
+  for (size_t k = begin; k < end; ++k) {
+    const V4f xk = packed[k];
+    const float x = xk[0], y = xk[1], z = xk[2], lk = xk[3];
+    const V8f x8 = splat8(x), y8 = splat8(y), z8 = splat8(z), lk8 = splat8(lk);
+    const uint32_t* list = g.nbrBlocks[k / kBlock].data() + g.nbrBegin[k];
+    const float* pairGrad = g.pairBlocks[k / kBlock].data() + g.nbrBegin[k];
+    const uint32_t count = g.nbrCount[k];
+    V8f sx8 = splat8(0.0f), sy8 = sx8, sz8 = sx8;
+    for (uint32_t q = 0; q < count; q += 8) {
+      const uint32_t* j = list + q;  // lanes past the count read the next list or the padding
+      V8f px8, py8, pz8, lj;
+      transpose8(packed, j, &px8, &py8, &pz8, &lj);
+      const V8f dx = x8 - px8, dy = y8 - py8, dz = z8 - pz8;
+      const V8i live = kLanes8 < int32_t(count - q);
+      V8f sum = lk8 + lj;
+      if (pulls) {
+        const V8f r2 = dx * dx + dy * dy + dz * dz;
+        const V8f t = masked8(r2 < h2, 1.0f - r2 * invH2), w = t * t * t * invWq, w2 = w * w;
+        sum -= corr * w2 * w2;
+      }
+      // (λ_i + λ_j + s) |∇W|/r, |∇W|/r from the λ pass (0 past h).
+      const V8f coef = masked8(live, sum * load8(pairGrad + q));
+      sx8 += coef * dx, sy8 += coef * dy, sz8 += coef * dz;
+    }
+    // ∇W_ij = −(|∇W|/r)(x_i − x_j).
+    Vec3 p = Vec3(x, y, z) - c.volume * Vec3(total8(sx8), total8(sy8), total8(sz8)) + lk * g.extGrad[k];
+    // Closed faces hold the particle s/4 inside; an obstacle, by its distance moved along the
+    // normal (the move is a fraction of the spacing; the substep's end asks the SDF again).
+    for (int a = 0; a < 3; ++a) p[a] = std::clamp(p[a], c.wallMin[a] + c.rmin, c.wallMax[a] - c.rmin);
+    const Vec3 moved = g.shift[k] + (p - Vec3(x, y, z));
+    const float d = g.sdf[k] + g.sdfNormal[k].dot(moved);
+    if (d < c.rmin) p += (c.rmin - d) * g.sdfNormal[k];
+    g.shift[k] += p - Vec3(x, y, z);
+    g.packedX[k] = V4f{p.x(), p.y(), p.z(), 0.0f};
   }
 }
 
@@ -1094,9 +1273,18 @@ template <class Grid, class Walls>
 [[gnu::target("avx2"), gnu::flatten]] void densityAvx2(Grid& g, const Walls& W, const PassConstants& c, size_t block) {
   densityBlock(g, W, c, block);
 }
-template <class Grid, class Plants>
+template <bool PositionBased, class Grid, class Plants>
 [[gnu::target("avx2"), gnu::flatten]] void plantAvx2(Grid& g, const Plants& P, const PassConstants& c, size_t block) {
-  plantBlock(g, P, c, block);
+  plantBlock<PositionBased>(g, P, c, block);
+}
+template <class Grid, class Walls>
+[[gnu::target("avx2"), gnu::flatten]] void lambdaAvx2(Grid& g, const Walls& W, const PassConstants& c, size_t begin,
+                                                     size_t end) {
+  lambdaRange(g, W, c, begin, end);
+}
+template <class Grid>
+[[gnu::target("avx2"), gnu::flatten]] void deltaAvx2(Grid& g, const PassConstants& c, size_t begin, size_t end) {
+  deltaRange(g, c, begin, end);
 }
 template <class Grid, class Walls>
 [[gnu::target("avx2"), gnu::flatten]] void forcesAvx2(Grid& g, const Walls& W, const PassConstants& c, size_t begin,
@@ -1116,9 +1304,17 @@ template <class Grid, class Walls>
 [[gnu::flatten]] void densityGeneric(Grid& g, const Walls& W, const PassConstants& c, size_t block) {
   densityBlock(g, W, c, block);
 }
-template <class Grid, class Plants>
+template <bool PositionBased, class Grid, class Plants>
 [[gnu::flatten]] void plantGeneric(Grid& g, const Plants& P, const PassConstants& c, size_t block) {
-  plantBlock(g, P, c, block);
+  plantBlock<PositionBased>(g, P, c, block);
+}
+template <class Grid, class Walls>
+[[gnu::flatten]] void lambdaGeneric(Grid& g, const Walls& W, const PassConstants& c, size_t begin, size_t end) {
+  lambdaRange(g, W, c, begin, end);
+}
+template <class Grid>
+[[gnu::flatten]] void deltaGeneric(Grid& g, const PassConstants& c, size_t begin, size_t end) {
+  deltaRange(g, c, begin, end);
 }
 template <class Grid, class Walls>
 [[gnu::flatten]] void forcesGeneric(Grid& g, const Walls& W, const PassConstants& c, size_t begin, size_t end) {
@@ -1173,30 +1369,41 @@ void SphAir::plantSide(particles::ParticleWorld& world) {
   }, 64);
 }
 
+namespace {
+
+// What every pass of a substep shares, from the settings.
+PassConstants passConstants(const SphSettings& s, size_t n, float h, float m, float background, bool hasPlants) {
+  PassConstants c;
+  c.n = n, c.h = h, c.h2 = h * h, c.invH2 = 1.0f / (h * h), c.m = m;
+  c.rho0 = s.restDensity, c.c2 = s.soundSpeed * s.soundSpeed;
+  c.background = background;
+  c.norm6 = kPoly6 / (h * h * h);
+  // The search radius: h and a hair, so that round-off in the run clipping loses no pair.
+  c.search = h * (1.0f + 1e-5f);
+  c.kp = 0.5f * m * (kSpiky / (h * h * h * h)) / (h * h);
+  c.kv = s.viscosity * m * (kVisc / (h * h * h * h * h)) / h;
+  c.hasPlants = hasPlants;
+  c.dmin = s.domainMin, c.dmax = s.domainMax;
+  for (int k = 0; k < 3; ++k) {
+    c.wallMin[k] = s.closed(2 * k) ? c.dmin[k] : -kInf;
+    c.wallMax[k] = s.closed(2 * k + 1) ? c.dmax[k] : kInf;
+    c.closed = c.closed || s.closed(2 * k) || s.closed(2 * k + 1);
+  }
+  c.volume = m / s.restDensity, c.invRho0 = 1.0f / s.restDensity;
+  c.spikyH = kSpiky / (h * h * h * h * h * h);
+  c.rmin = 0.25f * s.spacing;
+  c.tension = s.allClosed() ? s.backgroundPressure : 0.0f;
+  return c;
+}
+
+}  // namespace
+
 void SphAir::substep(const env::Environment& env, float dt) {
   Grid& g = *grid_;
   const Plants& P = *plants_;
   const Walls& W = *walls_;
   const size_t n = g.size(), blocks = (n + kBlock - 1) / kBlock;
-  const float h = h_, m = mass_;
-  PassConstants c;
-  c.n = n, c.h = h, c.h2 = h * h, c.invH2 = 1.0f / (h * h), c.m = m;
-  c.rho0 = settings_.restDensity, c.c2 = settings_.soundSpeed * settings_.soundSpeed;
-  c.background = backgroundPressure();
-  c.norm6 = kPoly6 / (h * h * h);
-  // The search radius: h and a hair, so that round-off in the run clipping loses no pair.
-  c.search = h * (1.0f + 1e-5f);
-  c.kp = 0.5f * m * (kSpiky / (h * h * h * h)) / (h * h);
-  c.kv = settings_.viscosity * m * (kVisc / (h * h * h * h * h)) / h;
-  c.hasPlants = P.size() > 0;
-  c.dmin = settings_.domainMin, c.dmax = settings_.domainMax;
-  for (int k = 0; k < 3; ++k) {
-    c.wallMin[k] = settings_.closed(2 * k) ? c.dmin[k] : -kInf;
-    c.wallMax[k] = settings_.closed(2 * k + 1) ? c.dmax[k] : kInf;
-    c.closed = c.closed || settings_.closed(2 * k) || settings_.closed(2 * k + 1);
-  }
-  const bool closed = c.closed, hasPlants = c.hasPlants;
-  const Vec3 dmin = c.dmin, dmax = c.dmax, wallMin = c.wallMin, wallMax = c.wallMax;
+  const PassConstants c = passConstants(settings_, n, h_, mass_, backgroundPressure(), P.size() > 0);
   g.nbrBlocks.resize(blocks);
   g.nbrBegin.resize(n), g.nbrCount.resize(n), g.hitCount.resize(n);
   g.invRho.resize(n), g.pOverRho.resize(n), g.packedX.resize(n), g.packedV.resize(n), g.plantAcc.resize(n);
@@ -1215,9 +1422,9 @@ void SphAir::substep(const env::Environment& env, float dt) {
     ScopedTimer t(&timings_.coupling);
     parallelFor(0, blocks, [&](size_t block) {
 #if TENDRIL_SPH_AVX2
-      if (avx2) return plantAvx2(g, P, c, block);
+      if (avx2) return plantAvx2<false>(g, P, c, block);
 #endif
-      plantGeneric(g, P, c, block);
+      plantGeneric<false>(g, P, c, block);
     }, 1);
   }
 
@@ -1233,65 +1440,206 @@ void SphAir::substep(const env::Environment& env, float dt) {
       forcesGeneric(g, W, c, begin, end);
     }, kGrain);
   }
+  move(env, dt, true);
+}
 
-  // Symplectic Euler, then the domain and the obstacles, in the grid's arrays; each particle's
-  // new cell for the re-sort.
-  {
-    ScopedTimer t(&timings_.obstacles);
-    const bool hasObstacles = env.obstacleCount() > 0;
-    const float vmax = settings_.soundSpeed, rmin = 0.25f * settings_.spacing;
-    g.cell.resize(n);
-    parallelFor(0, n, [&](size_t k) {
-      Vec3 v(g.vx[k], g.vy[k], g.vz[k]);
+// Moves the particles by their velocities (accelerate: after symplectic Euler's kick by the
+// substep's forces and the plants' implicit drag), then the domain and the obstacles, in the
+// grid's arrays; each particle's new cell for the re-sort.
+void SphAir::move(const env::Environment& env, float dt, bool accelerate) {
+  Grid& g = *grid_;
+  const size_t n = g.size();
+  const bool hasPlants = plants_->size() > 0;
+  const SphSettings& s = settings_;
+  const float h = h_, vmax = s.soundSpeed, rmin = 0.25f * s.spacing;
+  const Vec3 dmin = s.domainMin, dmax = s.domainMax;
+  Vec3 wallMin, wallMax;
+  bool closed = false;
+  for (int k = 0; k < 3; ++k) {
+    wallMin[k] = s.closed(2 * k) ? dmin[k] : -kInf;
+    wallMax[k] = s.closed(2 * k + 1) ? dmax[k] : kInf;
+    closed = closed || s.closed(2 * k) || s.closed(2 * k + 1);
+  }
+  ScopedTimer t(&timings_.obstacles);
+  const bool hasObstacles = env.obstacleCount() > 0;
+  g.cell.resize(n);
+  parallelFor(0, n, [&](size_t k) {
+    Vec3 v(g.vx[k], g.vy[k], g.vz[k]);
+    if (accelerate) {
       v += dt * g.acc[k];
       if (hasPlants) v += dt * g.dragAcc[k] / (1.0f + dt * g.dragRate[k]);  // implicit in the drag
       // A weakly compressible model means nothing past the speed of sound; a safeguard.
       const float speed = v.norm();
       if (speed > vmax) v *= vmax / speed;
-      const Vec3 x0(g.px[k], g.py[k], g.pz[k]);
-      Vec3 x = x0 + dt * v;
-      bool dead = false;
-      // Closed faces hold the particle s/4 inside; past an open one it is gone.
-      if (closed) {
-        for (int c = 0; c < 3; ++c) {
-          if (x[c] < wallMin[c] + rmin) x[c] = wallMin[c] + rmin, v[c] = std::max(v[c], 0.0f);
-          if (x[c] > wallMax[c] - rmin) x[c] = wallMax[c] - rmin, v[c] = std::min(v[c], 0.0f);
+    }
+    const Vec3 x0(g.px[k], g.py[k], g.pz[k]);
+    Vec3 x = x0 + dt * v;
+    bool dead = false;
+    // Closed faces hold the particle s/4 inside; past an open one it is gone.
+    if (closed) {
+      for (int c = 0; c < 3; ++c) {
+        if (x[c] < wallMin[c] + rmin) x[c] = wallMin[c] + rmin, v[c] = std::max(v[c], 0.0f);
+        if (x[c] > wallMax[c] - rmin) x[c] = wallMax[c] - rmin, v[c] = std::min(v[c], 0.0f);
+      }
+    }
+    if ((x.array() < dmin.array()).any() || (x.array() > dmax.array()).any()) {
+      dead = true;
+      dead_[g.order[k]] = 1;
+    }
+    if (hasObstacles) {
+      g.budget[k] -= kSdfLipschitz * (x - x0).norm();
+      if (g.budget[k] < h) {
+        // The distance where the particle moved (as querySdf).
+        Vec3 nrm;
+        const float d = env.signedDistance(x, &nrm);
+        g.budget[k] = d;
+        const bool near = d < h && nrm.squaredNorm() > 0.0f;
+        g.sdf[k] = near ? d : kInf;
+        g.sdfNormal[k] = near ? nrm : Vec3::Zero();
+        // Push out of the obstacle and remove the velocity into it.
+        if (g.sdf[k] < rmin) {
+          x += (rmin - g.sdf[k]) * nrm;
+          const float vn = v.dot(nrm);
+          if (vn < 0.0f) v -= vn * nrm;
+          g.sdf[k] = rmin;
+          g.budget[k] = rmin;
         }
       }
-      if ((x.array() < dmin.array()).any() || (x.array() > dmax.array()).any()) {
-        dead = true;
-        dead_[g.order[k]] = 1;
-      }
-      if (hasObstacles) {
-        g.budget[k] -= kSdfLipschitz * (x - x0).norm();
-        if (g.budget[k] < h) {
-          // The distance where the particle moved (as querySdf).
-          Vec3 nrm;
-          const float d = env.signedDistance(x, &nrm);
-          g.budget[k] = d;
-          const bool near = d < h && nrm.squaredNorm() > 0.0f;
-          g.sdf[k] = near ? d : kInf;
-          g.sdfNormal[k] = near ? nrm : Vec3::Zero();
-          // Push out of the obstacle and remove the velocity into it.
-          if (g.sdf[k] < rmin) {
-            x += (rmin - g.sdf[k]) * nrm;
-            const float vn = v.dot(nrm);
-            if (vn < 0.0f) v -= vn * nrm;
-            g.sdf[k] = rmin;
-            g.budget[k] = rmin;
-          }
-        }
-      }
-      g.px[k] = x.x(), g.py[k] = x.y(), g.pz[k] = x.z();
-      g.vx[k] = v.x(), g.vy[k] = v.y(), g.vz[k] = v.z();
-      if (dead) {
-        g.cell[k] = kDead;
-      } else {
-        const Eigen::Vector3i c = g.cellCoord(x);
-        g.cell[k] = g.cellIndex(c.x(), c.y(), c.z());
-      }
+    }
+    g.px[k] = x.x(), g.py[k] = x.y(), g.pz[k] = x.z();
+    g.vx[k] = v.x(), g.vy[k] = v.y(), g.vz[k] = v.z();
+    if (dead) {
+      g.cell[k] = kDead;
+    } else {
+      const Eigen::Vector3i c = g.cellCoord(x);
+      g.cell[k] = g.cellIndex(c.x(), c.y(), c.z());
+    }
+  }, kGrain);
+}
+
+// A substep of the position-based solver (PBF, Macklin & Müller 2013, Algorithm 1): move by
+// the velocity (prediction), re-sort and search the neighbours there, project the density
+// constraint `iterations` times (lambdaRange, deltaRange), then the velocity from the total
+// move, MCG03's viscosity (eq. 11's μ∇²v) and the plants' implicit drag on it, and the
+// obstacles asked again where the projections moved a particle near one. The air's pressure
+// is the constraint's multiplier: a projection λ ∇C is Δt² times the pressure acceleration
+// −∇p/ρ, so p_i = −ρ_i Σ λ_i / Δt² (kept per particle: the plants feel the last substep's
+// at the start of the next frame, as the weakly compressible air's at the frame's start).
+void SphAir::substepPositionBased(const env::Environment& env, float dt) {
+  move(env, dt, false);
+  {
+    ScopedTimer t(&timings_.neighbours);
+    regrid();
+  }
+  Grid& g = *grid_;
+  const Plants& P = *plants_;
+  const Walls& W = *walls_;
+  const size_t n = g.size(), blocks = (n + kBlock - 1) / kBlock;
+  PassConstants c = passConstants(settings_, n, h_, mass_, 0.0f, P.size() > 0);
+  c.eps = pbfEps_, c.corr = pbfCorr_, c.invWq = pbfInvWq_;
+  g.nbrBlocks.resize(blocks), g.pairBlocks.resize(blocks);
+  g.nbrBegin.resize(n), g.nbrCount.resize(n), g.hitCount.resize(n);
+  g.invRho.resize(n), g.pOverRho.resize(n), g.packedX.resize(n), g.packedX2.resize(n), g.packedV.resize(n);
+  g.plantRho.resize(n), g.plantGrad.resize(n), g.extGrad.resize(n);
+  g.lambdaSum.assign(n, 0.0f), g.shift.assign(n, Vec3::Zero());
+  const bool avx2 = useAvx2();
+  {
+    ScopedTimer t(&timings_.density);
+    parallelFor(0, blocks, [&](size_t block) {
+#if TENDRIL_SPH_AVX2
+      if (avx2) densityAvx2(g, W, c, block);
+      else
+#endif
+        densityGeneric(g, W, c, block);
+      g.pairBlocks[block].resize(g.nbrBlocks[block].size());  // the lists' length and their padding
+    }, 1);
+  }
+  {
+    ScopedTimer t(&timings_.coupling);
+    parallelFor(0, blocks, [&](size_t block) {
+#if TENDRIL_SPH_AVX2
+      if (avx2) return plantAvx2<true>(g, P, c, block);
+#endif
+      plantGeneric<true>(g, P, c, block);
+    }, 1);
+  }
+  timings_.particles += n;
+  for (size_t k = 0; k < n; ++k) timings_.airPairs += g.nbrCount[k], timings_.plantPairs += g.hitCount[k];
+
+  const float invDt = 1.0f / dt;
+  {
+    ScopedTimer t(&timings_.forces);
+    parallelFor(0, n, [&](size_t k) { g.packedX[k] = V4f{g.px[k], g.py[k], g.pz[k], 0.0f}; }, 2048);
+    for (int it = 0; it < settings_.iterations; ++it) {
+      parallelForRange(0, n, [&](size_t begin, size_t end) {
+#if TENDRIL_SPH_AVX2
+        if (avx2) return lambdaAvx2(g, W, c, begin, end);
+#endif
+        lambdaGeneric(g, W, c, begin, end);
+      }, kGrain);
+      parallelForRange(0, n, [&](size_t begin, size_t end) {
+#if TENDRIL_SPH_AVX2
+        if (avx2) return deltaAvx2(g, c, begin, end);
+#endif
+        deltaGeneric(g, c, begin, end);
+      }, kGrain);
+    }
+    // The velocity from the whole move; viscosity as in the weakly compressible forces (no
+    // pressure, walls or plants' push there: packedV's p/ρ and `pressure` are 0).
+    parallelFor(0, n, [&](size_t k) {
+      const V4f x = g.packedX[k];
+      g.px[k] = x[0], g.py[k] = x[1], g.pz[k] = x[2];
+      g.vx[k] += g.shift[k].x() * invDt, g.vy[k] += g.shift[k].y() * invDt, g.vz[k] += g.shift[k].z() * invDt;
+      g.invRho[k] = 1.0f / g.rho[k];
+      g.packedX[k] = V4f{x[0], x[1], x[2], g.invRho[k]};
+      g.packedV[k] = V4f{g.vx[k], g.vy[k], g.vz[k], 0.0f};
+      g.pressure[k] = 0.0f;
+    }, 2048);
+    PassConstants viscous = c;
+    viscous.closed = false, viscous.hasPlants = false;
+    parallelForRange(0, n, [&](size_t begin, size_t end) {
+#if TENDRIL_SPH_AVX2
+      if (avx2) return forcesAvx2(g, W, viscous, begin, end);
+#endif
+      forcesGeneric(g, W, viscous, begin, end);
     }, kGrain);
   }
+
+  ScopedTimer t(&timings_.obstacles);
+  const bool hasPlants = c.hasPlants, hasObstacles = env.obstacleCount() > 0;
+  const float h = h_, vmax = settings_.soundSpeed, rmin = c.rmin, pressureScale = -invDt * invDt;
+  const Vec3 dmin = c.dmin, dmax = c.dmax;
+  parallelFor(0, n, [&](size_t k) {
+    Vec3 v(g.vx[k], g.vy[k], g.vz[k]);
+    v += dt * g.acc[k];
+    if (hasPlants) v += dt * g.dragAcc[k] / (1.0f + dt * g.dragRate[k]);  // implicit in the drag
+    const float speed = v.norm();
+    if (speed > vmax) v *= vmax / speed;  // a safeguard, as in the weakly compressible solver
+    Vec3 x(g.px[k], g.py[k], g.pz[k]);
+    // Projections may carry a particle out through an open face: gone, as in move().
+    if ((x.array() < dmin.array()).any() || (x.array() > dmax.array()).any()) dead_[g.order[k]] = 1;
+    if (hasObstacles) {
+      g.budget[k] -= kSdfLipschitz * g.shift[k].norm();
+      if (g.budget[k] < h) {
+        Vec3 nrm;
+        const float d = env.signedDistance(x, &nrm);
+        g.budget[k] = d;
+        const bool near = d < h && nrm.squaredNorm() > 0.0f;
+        g.sdf[k] = near ? d : kInf;
+        g.sdfNormal[k] = near ? nrm : Vec3::Zero();
+        if (g.sdf[k] < rmin) {
+          x += (rmin - g.sdf[k]) * nrm;
+          const float vn = v.dot(nrm);
+          if (vn < 0.0f) v -= vn * nrm;
+          g.sdf[k] = rmin;
+          g.budget[k] = rmin;
+        }
+      }
+    }
+    g.px[k] = x.x(), g.py[k] = x.y(), g.pz[k] = x.z();
+    g.vx[k] = v.x(), g.vy[k] = v.y(), g.vz[k] = v.z();
+    g.pressure[k] = pressureScale * g.rho[k] * g.lambdaSum[k];
+  }, kGrain);
 }
 
 void SphAir::step(const env::Environment& env, particles::ParticleWorld* plants) {
@@ -1331,7 +1679,9 @@ void SphAir::step(const env::Environment& env, particles::ParticleWorld* plants)
     timings_.plantFrame = frame.seconds();
   }
 
-  // Substeps: Δt ≤ cfl·h/(c + v_max) (acoustic CFL) and ≤ 0.125 h² ρ0/μ (viscous diffusion).
+  // Substeps: Δt ≤ cfl·h/(c + v_max) (acoustic CFL; the position-based solver's, cfl·h/v_max)
+  // and ≤ 0.125 h² ρ0/μ (viscous diffusion).
+  const bool positionBased = settings_.solver == SphSolver::PositionBased;
   float vmax = 0.0f;
   for (const SphEmitter& e : emitters_) vmax = std::max(vmax, e.speed);
   vmax = tbb::parallel_reduce(
@@ -1342,7 +1692,8 @@ void SphAir::step(const env::Environment& env, particles::ParticleWorld* plants)
       },
       [](float a, float b) { return std::max(a, b); });
   vmax = std::min(std::sqrt(vmax), settings_.soundSpeed);
-  float limit = settings_.cfl * h / (settings_.soundSpeed + vmax);
+  float limit = positionBased ? settings_.cfl * h / std::max(vmax, 1e-6f)
+                              : settings_.cfl * h / (settings_.soundSpeed + vmax);
   if (settings_.viscosity > 0.0f) limit = std::min(limit, 0.125f * h * h * settings_.restDensity / settings_.viscosity);
   int substeps = int(std::ceil(settings_.dt / limit - 1e-4f));
   if (substeps > settings_.maxSubsteps) {
@@ -1355,6 +1706,10 @@ void SphAir::step(const env::Environment& env, particles::ParticleWorld* plants)
   substeps = std::max(substeps, 1);
   const float dt = settings_.dt / float(substeps);
   for (int s = 0; s < substeps; ++s) {
+    if (positionBased) {
+      substepPositionBased(env, dt);
+      continue;
+    }
     substep(env, dt);
     ScopedTimer t(&timings_.neighbours);
     if (s + 1 < substeps) regrid();

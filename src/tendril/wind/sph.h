@@ -3,7 +3,9 @@
 // Weakly compressible SPH after Müller, Charypar & Gross 2003 ("Particle-based fluid
 // simulation for interactive applications", MCG03): density by the poly6 kernel, pressure
 // p = c²(ρ − ρ0) with the spiky kernel's gradient, viscosity with the viscosity kernel's
-// Laplacian (seed 000 eq. 11–12). Grown branch particles of a ParticleWorld take part through
+// Laplacian (seed 000 eq. 11–12). Or (SphSolver::PositionBased) the pressure as the
+// multiplier of the density constraint ρ = ρ0, solved by position projections (Macklin &
+// Müller 2013, "Position Based Fluids"), in a third of the substeps. Grown branch particles of a ParticleWorld take part through
 // an anisotropic kernel W(G(x − x_j)) whose tensor G comes from the particle's ellipsoid
 // (eq. 13, after Owen et al. 1997): they add to the air's density and push it by pressure
 // like boundary particles, and they drag the air with a stem's cross-flow drag; the equal and
@@ -35,6 +37,18 @@ class ParticleWorld;
 
 namespace tendril::wind {
 
+// How the air's pressure is found.
+enum class SphSolver {
+  // MCG03's equation of state, p = c²(ρ − ρ0) + p_b, and explicit pressure forces: substeps
+  // at the acoustic CFL, Δt ≤ cfl·h/(c + v_max) (8–9 per 25 ms frame in a 2–4 m/s wind).
+  WeaklyCompressible,
+  // Position-based fluids (Macklin & Müller 2013): the pressure as the multiplier of the
+  // density constraint ρ/ρ0 = 1, solved by `iterations` Jacobi position projections per
+  // substep; substeps at the flow's CFL, Δt ≤ cfl·h/v_max (2–3 per frame). Viscosity, plants
+  // and walls as in the weakly compressible solver. See docs/sph.md, "Position-based solver".
+  PositionBased,
+};
+
 enum class SphBoundary {
   Outflow,  // particles leaving the domain box are removed
   Closed,   // the domain box's faces are walls
@@ -49,8 +63,10 @@ struct SphSettings {
   float viscosity = 0.02f;        // μ (Pa·s), artificial (air's own is 1.8e-5; see docs/sph.md)
   float dragCoefficient = 1.2f;   // C_d of a branch particle in cross-flow (a cylinder)
   float dt = 0.025f;              // frame step (s); use the plant world's step
-  float cfl = 0.4f;               // substeps keep Δt ≤ cfl · h / (c + v_max)
+  float cfl = 0.4f;               // substeps keep Δt ≤ cfl · h / (c + v_max) (PositionBased: cfl · h / v_max)
   int maxSubsteps = 64;           // per frame; more would be needed → the frame is clamped, warned once
+  SphSolver solver = SphSolver::WeaklyCompressible;
+  int iterations = 3;             // PositionBased: projections of the density constraint per substep (1–50)
   Vec3 domainMin = Vec3(-1, 0, -1);  // the simulated box (m)
   Vec3 domainMax = Vec3(1, 2, 1);
   // The domain box's faces: faces[2k] lies at domainMin[k], faces[2k + 1] at domainMax[k]
@@ -170,14 +186,16 @@ class SphAir final : public env::AirFlow {
   void collectPlants(const particles::ParticleWorld& plants);
   void plantSide(particles::ParticleWorld& plants);
   void substep(const env::Environment& env, float dt);
+  void substepPositionBased(const env::Environment& env, float dt);
+  void move(const env::Environment& env, float dt, bool accelerate);
   void querySdf(const env::Environment& env, size_t i);
-  void integrate(const env::Environment& env, float dt);
   size_t addParticle(const Vec3& x, const Vec3& v);
 
   SphSettings settings_;
   std::vector<SphEmitter> emitters_;
   std::vector<double> emitterClock_;  // s of emission owed per emitter
   float mass_ = 0, h_ = 0;
+  float pbfEps_ = 0, pbfCorr_ = 0, pbfInvWq_ = 0;  // the position-based solver's constants (constructor)
   float time_ = 0;
   uint64_t steps_ = 0;
   bool warnedCapacity_ = false, warnedSubsteps_ = false;
@@ -187,6 +205,7 @@ class SphAir final : public env::AirFlow {
   // Particles, dense, in spawn order.
   std::vector<Vec3> x_, v_;
   std::vector<float> rho_;
+  std::vector<float> p_;          // Pa: the position-based solver's pressure from the last substep
   std::vector<float> sdfBudget_;  // lower bound of the distance to any obstacle (m)
   std::vector<float> sdf_;        // distance to the nearest obstacle when closer than h, else +inf
   std::vector<Vec3> sdfNormal_;
