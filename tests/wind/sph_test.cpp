@@ -200,11 +200,12 @@ TEST_P(SphSolvers, AWindTunnelKeepsItsAirInAndLetsItOutAtTheOutlet) {
               100.0 * fullTunnel, 100.0 * fullOpen, countsTunnel[0], countsTunnel[1]);
   EXPECT_EQ(beyondTunnel, 0u);
   // The weakly compressible air piles up ahead of the block (150–190% of the rest density's
-  // particles in the first 40 cm); the position-based air stays near ρ0 there (100–110%), so
-  // the same flow holds fewer particles. Both hold 40% past the block, where the stream over
-  // it leaves the lee thin.
-  EXPECT_GT(fullTunnel, positionBased() ? 0.55 : 0.7);
-  EXPECT_GT(fullTunnel, fullOpen + 0.3);
+  // particles in the first 40 cm); the position-based air stays near ρ0 there (its emitter
+  // leaves out sites the air ahead still holds), so the same flow holds fewer particles
+  // (57% against 78%), and its open duct keeps more (35% against 20%: no particle is thrown
+  // out faster than the stream).
+  EXPECT_GT(fullTunnel, positionBased() ? 0.5 : 0.7);
+  EXPECT_GT(fullTunnel, fullOpen + (positionBased() ? 0.15 : 0.3));
   EXPECT_LT(std::fabs(double(countsTunnel[1]) / double(countsTunnel[0]) - 1.0), 0.05) << "outflow balances the inlet";
 }
 

@@ -663,6 +663,20 @@ size_t SphAir::coupledPlantParticles() const { return plants_->size(); }
 
 void SphAir::emit(const env::Environment& env) {
   const float s = settings_.spacing;
+  // The position-based air cannot be compressed: a site where the air ahead has not moved on
+  // (a particle closer than `gap`, in the grid of the frame's last substep) is left out, or the
+  // projections would throw the two apart.
+  const bool positionBased = settings_.solver == SphSolver::PositionBased;
+  const float gap = 0.75f * s;
+  const Grid& g = *grid_;
+  auto occupied = [&](const Vec3& p, float r) {
+    bool found = false;
+    g.forSphereRuns(p.x(), p.y(), p.z(), r, [&](uint32_t b, uint32_t e) {
+      for (uint32_t k = b; k < e && !found; ++k)
+        found = (Vec3(g.px[k], g.py[k], g.pz[k]) - p).squaredNorm() < r * r;
+    });
+    return found;
+  };
   for (size_t k = 0; k < emitters_.size(); ++k) {
     const SphEmitter& e = emitters_[k];
     // A layer: the square lattice of spacing s within the disc.
@@ -689,6 +703,7 @@ void SphAir::emit(const env::Environment& env) {
         const Vec3 p = site + offset;
         if (!Bounds3{settings_.domainMin, settings_.domainMax}.contains(p)) continue;
         if (env.obstacleCount() > 0 && env.signedDistance(p) < 0.45f * s) continue;
+        if (positionBased && occupied(p, gap)) continue;
         addParticle(p, e.direction * e.speed);
       }
     }
