@@ -1411,6 +1411,29 @@ PassConstants passConstants(const SphSettings& s, size_t n, float h, float m, fl
   return c;
 }
 
+// Particle k moved `moved` metres to x: its obstacle distance bound shrinks by 1.75 times that;
+// below h the distance is asked where it is now (as querySdf), and a particle closer than rmin
+// is pushed out with its velocity into the obstacle removed.
+template <class Grid>
+void obstacleAfterMove(Grid& g, const env::Environment& env, size_t k, float moved, float h, float rmin, Vec3& x,
+                       Vec3& v) {
+  g.budget[k] -= kSdfLipschitz * moved;
+  if (!(g.budget[k] < h)) return;
+  Vec3 nrm;
+  const float d = env.signedDistance(x, &nrm);
+  g.budget[k] = d;
+  const bool near = d < h && nrm.squaredNorm() > 0.0f;
+  g.sdf[k] = near ? d : kInf;
+  g.sdfNormal[k] = near ? nrm : Vec3::Zero();
+  if (g.sdf[k] < rmin) {
+    x += (rmin - g.sdf[k]) * nrm;
+    const float vn = v.dot(nrm);
+    if (vn < 0.0f) v -= vn * nrm;
+    g.sdf[k] = rmin;
+    g.budget[k] = rmin;
+  }
+}
+
 }  // namespace
 
 void SphAir::substep(const env::Environment& env, float dt) {
@@ -1501,26 +1524,7 @@ void SphAir::move(const env::Environment& env, float dt, bool accelerate) {
       dead = true;
       dead_[g.order[k]] = 1;
     }
-    if (hasObstacles) {
-      g.budget[k] -= kSdfLipschitz * (x - x0).norm();
-      if (g.budget[k] < h) {
-        // The distance where the particle moved (as querySdf).
-        Vec3 nrm;
-        const float d = env.signedDistance(x, &nrm);
-        g.budget[k] = d;
-        const bool near = d < h && nrm.squaredNorm() > 0.0f;
-        g.sdf[k] = near ? d : kInf;
-        g.sdfNormal[k] = near ? nrm : Vec3::Zero();
-        // Push out of the obstacle and remove the velocity into it.
-        if (g.sdf[k] < rmin) {
-          x += (rmin - g.sdf[k]) * nrm;
-          const float vn = v.dot(nrm);
-          if (vn < 0.0f) v -= vn * nrm;
-          g.sdf[k] = rmin;
-          g.budget[k] = rmin;
-        }
-      }
-    }
+    if (hasObstacles) obstacleAfterMove(g, env, k, (x - x0).norm(), h, rmin, x, v);
     g.px[k] = x.x(), g.py[k] = x.y(), g.pz[k] = x.z();
     g.vx[k] = v.x(), g.vy[k] = v.y(), g.vz[k] = v.z();
     if (dead) {
@@ -1633,24 +1637,7 @@ void SphAir::substepPositionBased(const env::Environment& env, float dt) {
     Vec3 x(g.px[k], g.py[k], g.pz[k]);
     // Projections may carry a particle out through an open face: gone, as in move().
     if ((x.array() < dmin.array()).any() || (x.array() > dmax.array()).any()) dead_[g.order[k]] = 1;
-    if (hasObstacles) {
-      g.budget[k] -= kSdfLipschitz * g.shift[k].norm();
-      if (g.budget[k] < h) {
-        Vec3 nrm;
-        const float d = env.signedDistance(x, &nrm);
-        g.budget[k] = d;
-        const bool near = d < h && nrm.squaredNorm() > 0.0f;
-        g.sdf[k] = near ? d : kInf;
-        g.sdfNormal[k] = near ? nrm : Vec3::Zero();
-        if (g.sdf[k] < rmin) {
-          x += (rmin - g.sdf[k]) * nrm;
-          const float vn = v.dot(nrm);
-          if (vn < 0.0f) v -= vn * nrm;
-          g.sdf[k] = rmin;
-          g.budget[k] = rmin;
-        }
-      }
-    }
+    if (hasObstacles) obstacleAfterMove(g, env, k, g.shift[k].norm(), h, rmin, x, v);
     g.px[k] = x.x(), g.py[k] = x.y(), g.pz[k] = x.z();
     g.vx[k] = v.x(), g.vy[k] = v.y(), g.vz[k] = v.z();
     g.pressure[k] = pressureScale * g.rho[k] * g.lambdaSum[k];
