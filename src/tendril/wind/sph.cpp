@@ -1487,17 +1487,10 @@ void SphAir::substep(const env::Environment& env, float dt) {
 void SphAir::move(const env::Environment& env, float dt, bool accelerate) {
   Grid& g = *grid_;
   const size_t n = g.size();
-  const bool hasPlants = plants_->size() > 0;
-  const SphSettings& s = settings_;
-  const float h = h_, vmax = s.soundSpeed, rmin = 0.25f * s.spacing;
-  const Vec3 dmin = s.domainMin, dmax = s.domainMax;
-  Vec3 wallMin, wallMax;
-  bool closed = false;
-  for (int k = 0; k < 3; ++k) {
-    wallMin[k] = s.closed(2 * k) ? dmin[k] : -kInf;
-    wallMax[k] = s.closed(2 * k + 1) ? dmax[k] : kInf;
-    closed = closed || s.closed(2 * k) || s.closed(2 * k + 1);
-  }
+  const PassConstants c = passConstants(settings_, n, h_, mass_, 0.0f, plants_->size() > 0);
+  const bool hasPlants = c.hasPlants, closed = c.closed;
+  const float h = h_, vmax = settings_.soundSpeed, rmin = c.rmin;
+  const Vec3 dmin = c.dmin, dmax = c.dmax, wallMin = c.wallMin, wallMax = c.wallMax;
   ScopedTimer t(&timings_.obstacles);
   const bool hasObstacles = env.obstacleCount() > 0;
   g.cell.resize(n);
