@@ -1,5 +1,6 @@
 // Growth-Flow motion on PlantModels, the wind field and the looping glTF wind animation.
 #include "tendril/core/error.h"
+#include "tendril/core/random.h"
 #include "tendril/env/wind_field.h"
 #include "tendril/io/gltf_animation.h"
 #include "tendril/wind/motion.h"
@@ -78,6 +79,52 @@ TEST(WindField, ConstantGustyAndEmitterWinds) {
   EXPECT_EQ(emitter.sample(Vec3(0, 1, -1), 0), Vec3::Zero());           // behind it
   EXPECT_EQ(emitter.sample(Vec3(3, 1, 1), 0), Vec3::Zero());            // beside it
   EXPECT_EQ(emitter.sample(Vec3(0, 1, 6), 0), Vec3::Zero());            // past its reach
+}
+
+TEST(WindField, GustSamplerGivesTheAmbientWindBitForBit) {
+  // Points spread over a plant-sized box, a field-sized one and (with tiny gusts) one too wide
+  // for the lattice table; winds along, across and straight up; times before zero and late.
+  struct Case {
+    Vec3 velocity;
+    float span, gustScale, gustPeriod;
+    bool tabled;
+  };
+  const Case cases[] = {{Vec3(9, 0, 3), 6.0f, 6.0f, 3.0f, true},    {Vec3(-2, 0.5f, -7), 300.0f, 6.0f, 3.0f, true},
+                        {Vec3(0, 7, 0), 6.0f, 0.5f, 0.2f, true},    {Vec3(4, 0, 0), 80.0f, 1e-3f, 3.0f, false},
+                        {Vec3(0, 0, 0), 6.0f, 6.0f, 3.0f, false}};
+  Rng rng(RandomKey{3, 0, 0, 0, purposeId("test.gust-sampler")});
+  for (const Case& c : cases) {
+    env::WindSettings s;
+    s.mode = env::WindMode::Gusty;
+    s.velocity = c.velocity;
+    s.gustScale = c.gustScale;
+    s.gustPeriod = c.gustPeriod;
+    s.seed = 11;
+    const env::WindField field(s);
+    std::vector<Vec3> points(2000);
+    for (Vec3& p : points) p = Vec3(rng.uniform(-c.span, c.span), rng.uniform(0, c.span), rng.uniform(-c.span, c.span) + 40.0f);
+    env::GustSampler sampler;
+    EXPECT_FALSE(sampler.preparedFor(field, points.size()));
+    sampler.prepare(field, points.data(), points.size());
+    EXPECT_TRUE(sampler.preparedFor(field, points.size()));
+    for (float t : {-37.3f, 0.0f, 0.04f, 2.5f, 1234.56f}) {
+      sampler.beginFrame(t);
+      EXPECT_EQ(sampler.tabled(), c.tabled) << "span " << c.span << " t " << t;
+      for (size_t k = 0; k < points.size(); ++k) {
+        const Vec3 a = sampler.ambient(k), b = field.ambient(points[k], t);
+        ASSERT_TRUE(a.x() == b.x() && a.y() == b.y() && a.z() == b.z())
+            << "span " << c.span << " t " << t << " point " << k << ": " << a.transpose() << " vs " << b.transpose();
+      }
+    }
+    // Other gusts, or other points, need preparing again.
+    env::WindSettings other = s;
+    other.seed = 12;
+    EXPECT_FALSE(sampler.preparedFor(env::WindField(other), points.size()));
+    other = s;
+    other.gustStrength = 0.1f;
+    EXPECT_FALSE(sampler.preparedFor(env::WindField(other), points.size()));
+    EXPECT_FALSE(sampler.preparedFor(field, points.size() + 1));
+  }
 }
 
 TEST(WindMotion, BranchesSwayTowardTheWindAndBack) {

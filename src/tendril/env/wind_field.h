@@ -20,6 +20,8 @@
 
 #include "tendril/core/math.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -78,9 +80,24 @@ class WindField {
   static Vec3 jet(const WindEmitter& e, const Vec3& p);
   // Smooth value noise in [−1, 1] over the plane (continuous, C2), keyed by seed.
   static float noise(float u, float v, uint64_t seed);
+  // The noise's interpolation weight, 6x⁵ − 15x⁴ + 10x³ (zero first and second derivatives at
+  // 0 and 1).
+  static float quintic(float x) { return x * x * x * (x * (x * 6.0f - 15.0f) + 10.0f); }
 
  private:
+  friend class GustSampler;
   void prepare();  // the frame below, from settings_
+  // The gusty wind from its two noise values: the prevailing wind scaled by 1 + gustStrength ·
+  // gust and turned by gustTurn · turn about +Y.
+  Vec3 gustWind(float gust, float turn) const {
+    // dir turned by θ about +Y: (x cos θ + z sin θ, y, z cos θ − x sin θ); θ is at most
+    // gustTurn, mostly a few degrees (sinCos's short series).
+    float c, sn;
+    sinCos(settings_.gustTurn * turn, &sn, &c);
+    const Vec3& dir = dir_;
+    const Vec3 turned(dir.x() * c + dir.z() * sn, dir.y(), dir.z() * c - dir.x() * sn);
+    return speed_ * std::max(0.0f, 1.0f + settings_.gustStrength * gust) * turned;
+  }
 
   WindSettings settings_;
   const AirFlow* air_ = nullptr;
@@ -88,6 +105,61 @@ class WindField {
   float speed_ = 0.0f;
   Vec3 dir_ = Vec3::UnitX(), across_ = Vec3::UnitX();
   bool acrossIsX_ = true;  // a vertical wind: its "across" position is x
+};
+
+// The gusty wind (WindField::ambient) at the same points frame after frame, bit for bit as
+// ambient(p, t) gives it, for models that sample every node of a plant each frame
+// (Growth-Flow motion). What depends on a point alone — its time of flight from the plane
+// through the origin, its place across the wind and the noise's weights across — is computed
+// when the points or the wind's gust settings change; each frame, the noise's lattice values
+// the points span (gusts are seconds and metres across, so a plant spans a handful) are hashed
+// once into a table. A span too large for the table falls back to ambient() per point.
+class GustSampler {
+ public:
+  void prepare(const WindField& field, const Vec3* points, size_t count);
+  // prepare() was called for `count` points and a field whose ambient wind is this one's.
+  bool preparedFor(const WindField& field, size_t count) const;
+  // Builds the lattice table for time t; then ambient(k) is field.ambient(points[k], t).
+  void beginFrame(float t);
+  // This frame reads the table (false: per point, or no gusts).
+  bool tabled() const { return tabled_; }
+  Vec3 ambient(size_t k) const {
+    const Point& q = points_[k];
+    if (!tabled_) return field_.ambient(q.position, t_);
+    const float tau = (t_ - q.flight) / field_.settings_.gustPeriod;
+    const float gust = tableNoise(table_[0], tau, q.row[0], q.b[0]);
+    const float turn = tableNoise(table_[1], tau + 101.3f, q.row[1], q.b[1]);
+    return field_.gustWind(gust, turn);
+  }
+
+ private:
+  struct Point {
+    Vec3 position;
+    float flight;     // p · ŵ / |w| (s)
+    int32_t row[2];   // lattice row across the wind (floor of the across coordinate) − the table's first
+    float b[2];       // quintic weight across
+  };
+  struct Table {
+    int64_t firstColumn = 0;  // lattice index along time of the first column
+    int32_t firstRow = 0, rows = 0;  // lattice rows across [firstRow, firstRow + rows)
+    std::vector<float> values;       // column-major: (column c, row r) at c · rows + r
+  };
+  // WindField::noise(u, v) for v's row and weight kept in the point.
+  static float tableNoise(const Table& T, float u, int32_t row, float b) {
+    const float fu = std::floor(u);
+    const float a = WindField::quintic(u - fu);
+    const float* L = T.values.data() + (int64_t(fu) - T.firstColumn) * T.rows + row;
+    const float x0 = L[0] + a * (L[T.rows] - L[0]);
+    const float x1 = L[1] + a * (L[T.rows + 1] - L[1]);
+    return x0 + b * (x1 - x0);
+  }
+
+  WindField field_;  // a copy of the settings (and frame) the points were prepared for
+  std::vector<Point> points_;
+  float flightMin_ = 0.0f, flightMax_ = 0.0f;
+  Table table_[2];  // the gust noise and the turn noise
+  bool tableable_ = false, tabled_ = false;
+  float t_ = 0.0f;
 };
 
 }  // namespace tendril::env

@@ -188,6 +188,14 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
   const bool uniform = !loop && ws.mode == env::WindMode::Constant && ws.emitters.empty();
   if (uniform && uniformCached_ && ws.velocity == uniformWind_) return;
 
+  // The gusts at the nodes' centres of gravity come from a sampler kept with the rest plant
+  // (the same numbers as wind.sample, without hashing the noise per node).
+  const bool simulated = ws.mode == env::WindMode::Sph;
+  if (!uniform && !loop && !simulated) {
+    if (!gusts_.preparedFor(wind, n)) gusts_.prepare(wind, centre_.data(), n);
+    gusts_.beginFrame(t);
+  }
+
   // F_w per node from the wind at its centre of gravity, and its moment about the node; the
   // node's sway axis u = b × w and its angle to the wind. A looping clip uses the steady wind
   // (prevailing + emitters) with gusts that repeat: the gust noise is read on a circle.
@@ -195,8 +203,11 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
     Vec3 w;
     if (uniform) {
       w = ws.velocity;
-    } else if (!loop) {
+    } else if (simulated) {
       w = wind.sample(centre_[i], t);
+    } else if (!loop) {
+      w = gusts_.ambient(i);  // wind.sample: the ambient wind and the emitters' jets
+      for (const env::WindEmitter& e : ws.emitters) w += env::WindField::jet(e, centre_[i]);
     } else {
       w = ws.velocity;
       for (const env::WindEmitter& e : ws.emitters) w += env::WindField::jet(e, centre_[i]);

@@ -104,6 +104,7 @@ class WindMotion {
   std::vector<Vec3> force_;        // F_w + T_r
   std::vector<Vec3> moment_;       // moment of F_w + T_r about the node
   std::vector<float> speed_;       // the wind speed at the node's centre of gravity
+  env::GustSampler gusts_;         // the wind's gusts at centre_ (non-uniform wind, not looped)
   bool uniformCached_ = false;     // nodes_' sway and speed_ are those of a uniform `uniformWind_`
   Vec3 uniformWind_ = Vec3::Zero();
   std::vector<float> angle_;
