@@ -118,6 +118,17 @@ TEST(WindField, GustSamplerGivesTheAmbientWindBitForBit) {
         ASSERT_TRUE(a.x() == b.x() && a.y() == b.y() && a.z() == b.z())
             << "span " << c.span << " t " << t << " point " << k << ": " << a.transpose() << " vs " << b.transpose();
       }
+      // Four at a time.
+      for (size_t k = 0; k + 4 <= points.size(); k += 4) {
+        float x[4], y[4], z[4];
+        sampler.ambient4(k, x, y, z);
+        for (size_t l = 0; l < 4; ++l) {
+          const Vec3 b = field.ambient(points[k + l], t);
+          ASSERT_TRUE(x[l] == b.x() && y[l] == b.y() && z[l] == b.z())
+              << "span " << c.span << " t " << t << " point " << k + l << ": " << Vec3(x[l], y[l], z[l]).transpose()
+              << " vs " << b.transpose();
+        }
+      }
     }
     // Other gusts, or other points, need preparing again.
     env::WindSettings other = s;
@@ -229,6 +240,36 @@ TEST(WindMotion, SameForAnyThreadCountInASteadyWind) {
   storm.velocity = Vec3(30, 0, 2);
   const std::array<uint64_t, 2> hashes = posedHashesOnOneAndTwoThreads([&](int f) { return f < 29 ? steady : storm; });
   EXPECT_EQ(hashes[0], hashes[1]);
+}
+
+TEST(WindMotion, DragFourNodesAtATimeIsDragOneAtATime) {
+  // The drag pass's four lanes against its one-node code, in gusts along, across and straight
+  // up, with and without an emitter (the gusts then sampled per node), over 20 frames of an ivy
+  // whose node count is not a multiple of four.
+  plant::PlantModel rest = meshtest::syntheticIvy(2003, 7);
+  for (uint32_t& f : rest.flags) f &= ~uint32_t(plant::kNodeClimbing);
+  ASSERT_NE(rest.nodeCount() % 4, 0u);
+  env::WindEmitter jet;
+  jet.position = Vec3(-1, 0.5f, 0);
+  jet.direction = Vec3::UnitX();
+  jet.radius = 1.0f;
+  for (const Vec3& velocity : {Vec3(9, 0, 3), Vec3(0, 7, 0.5f)})
+    for (bool emitter : {false, true}) {
+      env::WindSettings s;
+      s.mode = env::WindMode::Gusty;
+      s.velocity = velocity;
+      if (emitter) s.emitters.push_back(jet);
+      std::array<uint64_t, 2> hashes{};
+      for (bool lanes : {true, false}) {
+        detail::setDragLanes(lanes);
+        WindMotion motion(rest, GrowthFlowSpecies{});
+        plant::PlantModel posed;
+        for (int f = 0; f < 20; ++f) motion.step(0.3f * float(f), 0.04f, env::WindField(s), posed);
+        hashes[lanes ? 0 : 1] = plant::contentHash(posed);
+      }
+      detail::setDragLanes(true);
+      EXPECT_EQ(hashes[0], hashes[1]) << velocity.transpose() << (emitter ? " with an emitter" : "");
+    }
 }
 
 TEST(WindMotion, SteadyWindIsReusedOnlyWhileItLasts) {

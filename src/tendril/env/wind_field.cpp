@@ -3,6 +3,7 @@
 #include "tendril/core/random.h"
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 namespace tendril::env {
@@ -93,8 +94,12 @@ void GustSampler::prepare(const WindField& field, const Vec3* points, size_t cou
   field_ = field;
   field_.setAirFlow(nullptr);
   const WindSettings& s = field_.settings_;
-  points_.resize(count);
-  for (size_t k = 0; k < count; ++k) points_[k].position = points[k];
+  position_.assign(points, points + count);
+  flight_.resize(count);
+  for (int n = 0; n < 2; ++n) {
+    row_[n].resize(count);
+    b_[n].resize(count);
+  }
   // Without gusts ambient() is the prevailing wind; a non-finite point or an across span beyond
   // the table samples per point.
   tableable_ = s.mode == WindMode::Gusty && field_.speed_ > 0.0f && count > 0;
@@ -103,9 +108,9 @@ void GustSampler::prepare(const WindField& field, const Vec3* points, size_t cou
   flightMin_ = std::numeric_limits<float>::infinity();
   flightMax_ = -flightMin_;
   int32_t rowMin[2] = {INT32_MAX, INT32_MAX}, rowMax[2] = {INT32_MIN, INT32_MIN};
-  for (Point& q : points_) {
-    const Vec3& p = q.position;
-    q.flight = p.dot(field_.dir_) / field_.speed_;
+  for (size_t k = 0; k < count; ++k) {
+    const Vec3& p = position_[k];
+    const float flight = p.dot(field_.dir_) / field_.speed_;
     const float acrossDist = field_.acrossIsX_ ? p.x() : p.dot(field_.across_);
     const float sigma = acrossDist / s.gustScale;
     const float v[2] = {sigma, sigma + 57.1f};
@@ -115,17 +120,18 @@ void GustSampler::prepare(const WindField& field, const Vec3* points, size_t cou
         tableable_ = false;
         return;
       }
-      q.row[n] = int32_t(fv);
-      q.b[n] = WindField::quintic(v[n] - fv);
-      rowMin[n] = std::min(rowMin[n], q.row[n]);
-      rowMax[n] = std::max(rowMax[n], q.row[n]);
+      row_[n][k] = int32_t(fv);
+      b_[n][k] = WindField::quintic(v[n] - fv);
+      rowMin[n] = std::min(rowMin[n], row_[n][k]);
+      rowMax[n] = std::max(rowMax[n], row_[n][k]);
     }
-    if (!std::isfinite(q.flight)) {
+    if (!std::isfinite(flight)) {
       tableable_ = false;
       return;
     }
-    flightMin_ = std::min(flightMin_, q.flight);
-    flightMax_ = std::max(flightMax_, q.flight);
+    flight_[k] = flight;
+    flightMin_ = std::min(flightMin_, flight);
+    flightMax_ = std::max(flightMax_, flight);
   }
   for (int n = 0; n < 2; ++n) {
     const int64_t rows = int64_t(rowMax[n]) - rowMin[n] + 2;  // each point reads its row and the next
@@ -135,15 +141,14 @@ void GustSampler::prepare(const WindField& field, const Vec3* points, size_t cou
     }
     table_[n].firstRow = rowMin[n];
     table_[n].rows = int32_t(rows);
+    for (int32_t& r : row_[n]) r -= rowMin[n];
   }
-  for (Point& q : points_)
-    for (int n = 0; n < 2; ++n) q.row[n] -= table_[n].firstRow;
 }
 
 bool GustSampler::preparedFor(const WindField& field, size_t count) const {
   const WindSettings& a = field.settings_;
   const WindSettings& b = field_.settings_;
-  if (points_.size() != count || a.mode != b.mode || a.velocity != b.velocity) return false;
+  if (position_.size() != count || a.mode != b.mode || a.velocity != b.velocity) return false;
   return a.mode != WindMode::Gusty || (a.gustStrength == b.gustStrength && a.gustPeriod == b.gustPeriod &&
                                        a.gustScale == b.gustScale && a.gustTurn == b.gustTurn && a.seed == b.seed);
 }
@@ -174,6 +179,85 @@ void GustSampler::beginFrame(float t) {
         T.values[size_t(c * T.rows + r)] = lattice(T.firstColumn + c, int64_t(T.firstRow) + r, seeds[n]);
   }
   tabled_ = true;
+}
+
+namespace {
+
+// Four lanes: each lane does the scalar steps of ambient(), operation for operation, so gives
+// the same bits.
+using F4 = float __attribute__((vector_size(16)));
+using I4 = int32_t __attribute__((vector_size(16)));
+
+inline F4 load4(const float* p) {
+  F4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+inline I4 load4(const int32_t* p) {
+  I4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+// std::floor for |x| < 2³¹: truncate, step down where that rounded up, keep the sign of zero.
+inline F4 floor4(F4 x) {
+  F4 f = __builtin_convertvector(__builtin_convertvector(x, I4), F4);
+  f = f > x ? f - 1.0f : f;
+  return F4(I4(f) | (I4(x) & I4(F4{-0.0f, -0.0f, -0.0f, -0.0f})));
+}
+inline F4 quintic4(F4 x) { return x * x * x * (x * (x * 6.0f - 15.0f) + 10.0f); }
+
+}  // namespace
+
+void GustSampler::ambient4(size_t k, float* x, float* y, float* z) const {
+  if (!tabled_) {
+    for (int l = 0; l < 4; ++l) {
+      const Vec3 w = ambient(k + size_t(l));
+      x[l] = w.x(), y[l] = w.y(), z[l] = w.z();
+    }
+    return;
+  }
+  const WindSettings& s = field_.settings_;
+  const F4 tau = (t_ - load4(flight_.data() + k)) / s.gustPeriod;
+  F4 noise[2];
+  for (int n = 0; n < 2; ++n) {
+    const Table& T = table_[n];
+    const F4 u = n == 0 ? tau : tau + 101.3f;
+    const F4 fu = floor4(u);
+    const F4 a = quintic4(u - fu);
+    // The table's columns are a few of the frame's: the offsets fit 32 bits.
+    const I4 at = (__builtin_convertvector(fu, I4) - int32_t(T.firstColumn)) * T.rows + load4(row_[n].data() + k);
+    F4 L00, L10, L01, L11;
+    for (int l = 0; l < 4; ++l) {
+      const float* L = T.values.data() + at[l];
+      L00[l] = L[0], L10[l] = L[T.rows], L01[l] = L[1], L11[l] = L[T.rows + 1];
+    }
+    const F4 x0 = L00 + a * (L10 - L00);
+    const F4 x1 = L01 + a * (L11 - L01);
+    noise[n] = x0 + load4(b_[n].data() + k) * (x1 - x0);
+  }
+  // WindField::gustWind, with sinCos's series where every lane's angle is below 0.5.
+  const F4 angle = s.gustTurn * noise[1];
+  F4 sn, c;
+  const F4 small = F4(I4(angle) & 0x7fffffff) < 0.5f;
+  if ((small[0] != 0) & (small[1] != 0) & (small[2] != 0) & (small[3] != 0)) {
+    const F4 x2 = angle * angle;
+    sn = angle * (1.0f + x2 * (-1.0f / 6.0f + x2 * (1.0f / 120.0f + x2 * (-1.0f / 5040.0f))));
+    c = 1.0f + x2 * (-0.5f + x2 * (1.0f / 24.0f + x2 * (-1.0f / 720.0f + x2 * (1.0f / 40320.0f))));
+  } else {
+    for (int l = 0; l < 4; ++l) {
+      float sl, cl;
+      sinCos(angle[l], &sl, &cl);
+      sn[l] = sl;
+      c[l] = cl;
+    }
+  }
+  const Vec3& dir = field_.dir_;
+  const F4 grown = 1.0f + s.gustStrength * noise[0];
+  const F4 scale = field_.speed_ * (grown > 0.0f ? grown : F4{});
+  const F4 wx = scale * (dir.x() * c + dir.z() * sn), wy = scale * dir.y(), wz = scale * (dir.z() * c - dir.x() * sn);
+  std::memcpy(x, &wx, sizeof wx);
+  std::memcpy(y, &wy, sizeof wy);
+  std::memcpy(z, &wz, sizeof wz);
 }
 
 }  // namespace tendril::env

@@ -124,27 +124,22 @@ class GustSampler {
   // This frame reads the table (false: per point, or no gusts).
   bool tabled() const { return tabled_; }
   Vec3 ambient(size_t k) const {
-    const Point& q = points_[k];
-    if (!tabled_) return field_.ambient(q.position, t_);
-    const float tau = (t_ - q.flight) / field_.settings_.gustPeriod;
-    const float gust = tableNoise(table_[0], tau, q.row[0], q.b[0]);
-    const float turn = tableNoise(table_[1], tau + 101.3f, q.row[1], q.b[1]);
+    if (!tabled_) return field_.ambient(position_[k], t_);
+    const float tau = (t_ - flight_[k]) / field_.settings_.gustPeriod;
+    const float gust = tableNoise(table_[0], tau, row_[0][k], b_[0][k]);
+    const float turn = tableNoise(table_[1], tau + 101.3f, row_[1][k], b_[1][k]);
     return field_.gustWind(gust, turn);
   }
+  // ambient(k + l) for l = 0…3 as x[l], y[l], z[l] (the same bits; four lanes at once).
+  void ambient4(size_t k, float* x, float* y, float* z) const;
 
  private:
-  struct Point {
-    Vec3 position;
-    float flight;     // p · ŵ / |w| (s)
-    int32_t row[2];   // lattice row across the wind (floor of the across coordinate) − the table's first
-    float b[2];       // quintic weight across
-  };
   struct Table {
     int64_t firstColumn = 0;  // lattice index along time of the first column
     int32_t firstRow = 0, rows = 0;  // lattice rows across [firstRow, firstRow + rows)
     std::vector<float> values;       // column-major: (column c, row r) at c · rows + r
   };
-  // WindField::noise(u, v) for v's row and weight kept in the point.
+  // WindField::noise(u, v) for v's row and weight kept per point.
   static float tableNoise(const Table& T, float u, int32_t row, float b) {
     const float fu = std::floor(u);
     const float a = WindField::quintic(u - fu);
@@ -155,7 +150,12 @@ class GustSampler {
   }
 
   WindField field_;  // a copy of the settings (and frame) the points were prepared for
-  std::vector<Point> points_;
+  // Per point: its position, p · ŵ / |w| (s), and per noise its lattice row across the wind
+  // (floor of the across coordinate, less the table's first row) and quintic weight across.
+  std::vector<Vec3> position_;
+  std::vector<float> flight_;
+  std::vector<int32_t> row_[2];
+  std::vector<float> b_[2];
   float flightMin_ = 0.0f, flightMax_ = 0.0f;
   Table table_[2];  // the gust noise and the turn noise
   bool tableable_ = false, tabled_ = false;

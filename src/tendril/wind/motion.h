@@ -28,6 +28,7 @@
 #pragma once
 
 #include "tendril/env/wind_field.h"
+#include "tendril/particles/match_lanes.h"
 #include "tendril/plant/plant_model.h"
 #include "tendril/wind/growth_flow.h"
 
@@ -100,6 +101,15 @@ class WindMotion {
   std::vector<Vec3> centre_;       // centre of gravity of the segment (world, rest)
   std::vector<Vec3> direction_;    // unit segment direction b̂ (world, rest)
   std::vector<uint8_t> held_;      // grows on a support: does not sway
+  // The drag's inputs for nodes 4b … 4b + 3, lane l for node 4b + l: b̂, the lever from the
+  // node to the centre of gravity, the projected areas of the segment (2 r l) and of its
+  // leaves, and whether the node may sway (not held by a support: all bits set).
+  struct DragBlock {
+    particles::lanes::V3 direction, lever;
+    particles::lanes::F4 stemArea, leafArea;
+    particles::lanes::M4 free;
+  };
+  std::vector<DragBlock> dragBlocks_;
   // Per node, per step (torques only when the wind is not uniform or changed).
   std::vector<Vec3> force_;        // F_w + T_r
   std::vector<Vec3> moment_;       // moment of F_w + T_r about the node
@@ -131,5 +141,11 @@ class WindMotion {
   std::vector<uint32_t> slot_;     // per leaf: its index in kept_ (the posed plant's leaf)
   const plant::PlantModel* posedFor_ = nullptr;  // `posed` last written, its rest arrays copied
 };
+
+namespace detail {
+// Tests: the drag pass four nodes at a time (the default) or one at a time; both give the same
+// bits.
+void setDragLanes(bool on);
+}  // namespace detail
 
 }  // namespace tendril::wind
