@@ -157,7 +157,7 @@ TEST(WindMotion, BranchesSwayTowardTheWindAndBack) {
     maxLean = std::max(maxLean, double(lean));
     minLean = std::min(minLean, double(lean));
     for (size_t i = 0; i < posed.nodeCount(); ++i) {
-      ASSERT_LE(motion.swayAngles()[i], species.maxSwayAngle + 1e-6f);
+      ASSERT_LE(motion.swayAngle(i), species.maxSwayAngle + 1e-6f);
       ASSERT_NEAR(posed.length[i], rest.length[i], 0.0f);
     }
     // The stem stays connected: each chain node starts where its parent ends.

@@ -292,14 +292,13 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
     const float dt = options.seconds / float(frames - 1);
     for (int k = 0; k < frames; ++k) {
       motion.step(times[size_t(k)], dt, wind, posed);
-      const std::vector<Quat>& Q = motion.nodeRotation();
       for (size_t j = 0; j < joints.size(); ++j) {
         size_t node = size_t(joints[j]);
-        Quat q = Q[node];
+        Quat q = motion.nodeRotation(node);
         Vec3 p = posed.position[node];
         if (parentJoint[j] >= 0) {
           size_t pn = size_t(joints[size_t(parentJoint[j])]);
-          Quat qp = Q[pn];
+          Quat qp = motion.nodeRotation(pn);
           q = (qp.conjugate() * q).normalized();
           p = qp.conjugate() * (p - posed.position[pn]);
         }

@@ -81,10 +81,10 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
   const size_t n = rest_.nodeCount();
   nodes_.resize(n);
   stiffness_.resize(n);
-  area_.resize(n);
-  held_.resize(n);
+  std::vector<float> area(n);
+  std::vector<uint8_t> held(n);
+  std::vector<Vec3> direction(n);
   centre_.resize(n);
-  direction_.resize(n);
   force_.resize(n);
   moment_.resize(n);
   speed_.resize(n);
@@ -99,11 +99,11 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
   for (size_t i = 0; i < n; ++i) {
     float r = rest_.radius[i], l = rest_.length[i];
     stiffness_[i] = species_.youngModulus * kPi * r * r * r * r / (4.0f * std::max(l, 1e-4f));
-    area_[i] = 2.0f * r * l;
+    area[i] = 2.0f * r * l;
     mass[i] = species_.woodDensity * kPi * r * r * l;
-    held_[i] = heldBySupport(rest_.flags[i]);
-    direction_[i] = rest_.direction(i);
-    centre_[i] = rest_.position[i] + 0.5f * l * direction_[i];
+    held[i] = heldBySupport(rest_.flags[i]);
+    direction[i] = rest_.direction(i);
+    centre_[i] = rest_.position[i] + 0.5f * l * direction[i];
     pose_[i] = Pose{rest_.position[i], 0.0f};
   }
   std::vector<float> leafAreaOfNode(n, 0.0f);
@@ -114,20 +114,7 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
     leafAreaOfNode[size_t(node)] += area;
     mass[size_t(node)] += species_.leafMass;
   }
-  for (size_t i = 0; i < n; ++i) area_[i] += leafAreaOfNode[i];
-  // The same inputs per four nodes, one per lane (dragOne's per-node arithmetic, kept).
-  dragBlocks_.resize(n / 4);
-  for (size_t i = 0; i < 4 * dragBlocks_.size(); ++i) {
-    DragBlock& B = dragBlocks_[i / 4];
-    const size_t l = i % 4;
-    const float stemA = 2.0f * rest_.radius[i] * rest_.length[i];
-    const Vec3 lever = centre_[i] - rest_.position[i];
-    B.direction.x[l] = direction_[i].x(), B.direction.y[l] = direction_[i].y(), B.direction.z[l] = direction_[i].z();
-    B.lever.x[l] = lever.x(), B.lever.y[l] = lever.y(), B.lever.z[l] = lever.z();
-    B.stemArea[l] = stemA;
-    B.leafArea[l] = area_[i] - stemA;
-    B.free[l] = held_[i] ? 0 : -1;
-  }
+  for (size_t i = 0; i < n; ++i) area[i] += leafAreaOfNode[i];
   // Subtree masses (children after parents, so a reverse pass sums them).
   std::vector<float> carried = mass;
   for (size_t i = n; i-- > 0;)
@@ -186,22 +173,59 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
       roots.push_back(uint32_t(i));
     }
   }
+  std::vector<uint32_t> topNodes, taskNodes;  // ascending within the top part and within each task
   std::vector<uint32_t> count(roots.size() + 1, 0);
   for (size_t i = 0; i < n; ++i) {
     if (taskOf[i] >= 0) ++count[size_t(taskOf[i]) + 1];
-    else topNodes_.push_back(uint32_t(i));
+    else topNodes.push_back(uint32_t(i));
     if (taskOf[i] < 0 || roots[size_t(taskOf[i])] == i) mergeNodes_.push_back(uint32_t(i));
   }
   for (size_t k = 1; k < count.size(); ++k) count[k] += count[k - 1];
   taskStart_ = count;
-  taskNodes_.resize(count.back());
+  taskNodes.resize(count.back());
   for (size_t i = 0; i < n; ++i)
-    if (taskOf[i] >= 0) taskNodes_[count[size_t(taskOf[i])]++] = uint32_t(i);
+    if (taskOf[i] >= 0) taskNodes[count[size_t(taskOf[i])]++] = uint32_t(i);
+
+  // Internally the nodes are kept in the order the passes visit them: the top part, then task
+  // after task (each in index order), so that a task's nodes lie together in memory. Every sum
+  // is still taken in the same order, so the results are those of the plant's own numbering.
+  order_ = topNodes;
+  order_.insert(order_.end(), taskNodes.begin(), taskNodes.end());
+  internal_.resize(n);
+  for (size_t k = 0; k < n; ++k) internal_[order_[k]] = uint32_t(k);
+  auto permute = [&](auto& v) {
+    const auto byIndex = v;
+    for (size_t k = 0; k < n; ++k) v[k] = byIndex[order_[k]];
+  };
+  permute(nodes_);
+  for (SwayNode& r : nodes_)
+    if (r.parent >= 0) r.parent = int32_t(internal_[size_t(r.parent)]);
+  permute(stiffness_);
+  permute(centre_);
+  permute(pose_);
+  for (uint32_t& i : mergeNodes_) i = internal_[i];
+  topCount_ = topNodes.size();
+  leafNode_.resize(m);
+  for (size_t j = 0; j < m; ++j) leafNode_[j] = internal_[size_t(rest_.leafNode[j])];
+
+  // The drag's inputs per four nodes, one per lane (the lanes past the last node zero).
+  dragBlocks_.assign((n + 3) / 4, DragBlock{});
+  for (size_t k = 0; k < n; ++k) {
+    DragBlock& B = dragBlocks_[k / 4];
+    const size_t l = k % 4, i = order_[k];
+    const float stemA = 2.0f * rest_.radius[i] * rest_.length[i];
+    const Vec3 lever = centre_[k] - rest_.position[i];
+    B.direction.x[l] = direction[i].x(), B.direction.y[l] = direction[i].y(), B.direction.z[l] = direction[i].z();
+    B.lever.x[l] = lever.x(), B.lever.y[l] = lever.y(), B.lever.z[l] = lever.z();
+    B.stemArea[l] = stemA;
+    B.leafArea[l] = area[i] - stemA;
+    B.free[l] = held[i] ? 0 : -1;
+  }
 }
 
 std::vector<Vec3> WindMotion::nodeTranslation() const {
   std::vector<Vec3> T(pose_.size());
-  for (size_t i = 0; i < T.size(); ++i) T[i] = pose_[i].position - Q_[i] * rest_.position[i];
+  for (size_t i = 0; i < T.size(); ++i) T[i] = pose_[internal_[i]].position - Q_[internal_[i]] * rest_.position[i];
   return T;
 }
 
@@ -250,18 +274,21 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
     return w;
   };
   auto dragOne = [&](size_t i, const Vec3& w) {
-    const Vec3& d = direction_[i];
+    const DragBlock& B = dragBlocks_[i / 4];
+    const size_t l = i % 4;
+    const Vec3 d(B.direction.x[l], B.direction.y[l], B.direction.z[l]);
+    const Vec3 lever(B.lever.x[l], B.lever.y[l], B.lever.z[l]);
     const float along = w.dot(d), speed = w.norm();
     const Vec3 wPerp = w - along * d;
-    const float stemA = 2.0f * rest_.radius[i] * rest_.length[i], leafA = area_[i] - stemA;
+    const float stemA = B.stemArea[l], leafA = B.leafArea[l];
     force_[i] = half * (stemA * wPerp.norm() * wPerp + leafA * speed * w);
-    moment_[i] = (centre_[i] - rest_.position[i]).cross(force_[i]);
+    moment_[i] = lever.cross(force_[i]);
     speed_[i] = speed;
     SwayNode& r = nodes_[i];
     r.axis = Vec3::UnitX();
     r.sinToWind = 0.0f;  // below the threshold: does not sway
     r.cosToWind = 1.0f;
-    if (!held_[i] && speed > 0.0f) {
+    if (B.free[l] != 0 && speed > 0.0f) {
       // u = b × ŵ: |b × w| / |w| is the sine of the angle to the wind, b · w / |w| its cosine.
       const Vec3 u = d.cross(w);
       const float un = u.norm(), invSpeed = 1.0f / speed, s = un * invSpeed;
@@ -316,15 +343,17 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
   // T_r: what the children pass back, as their total force and its moment about this node;
   // children in decreasing index order, within tasks in parallel, then the top part.
   auto passBack = [&](size_t i) {
-    const size_t q = size_t(rest_.parent[i]);
-    moment_[q] += moment_[i] + (rest_.position[i] - rest_.position[q]).cross(force_[i]);
+    const SwayNode& r = nodes_[i];
+    const size_t q = size_t(r.parent);
+    moment_[q] += moment_[i] + r.offset.cross(force_[i]);
     force_[q] += force_[i];
   };
+  const size_t top = topCount_;
   parallelFor(size_t(0), taskStart_.size() - 1, [&](size_t k) {
-    for (size_t e = taskStart_[k + 1]; e-- > size_t(taskStart_[k]) + 1;) passBack(taskNodes_[e]);
+    for (size_t i = top + taskStart_[k + 1]; i-- > top + taskStart_[k] + 1;) passBack(i);
   }, 1);
   for (size_t e = mergeNodes_.size(); e-- > 0;)
-    if (rest_.parent[mergeNodes_[e]] >= 0) passBack(mergeNodes_[e]);
+    if (nodes_[mergeNodes_[e]].parent >= 0) passBack(mergeNodes_[e]);
 
   // The steady angle: the moment against the segment's spring (eq. 1 balanced by K), at most
   // the species' limit.
@@ -354,6 +383,7 @@ void WindMotion::compose(float t, plant::PlantModel& posed) {
   float* const angle = angle_.data();
   Vec3* const position = posed.position.data();
   Quat* const orientation = posed.orientation.data();
+  const uint32_t* const order = order_.data();
   auto composeNode = [=](size_t i) {
     const SwayNode& r = nodes[i];
     Quat Qp = Quat::Identity();
@@ -378,14 +408,14 @@ void WindMotion::compose(float t, plant::PlantModel& posed) {
     angle[i] = a;
     rotation[i] = Q;
     pose[i] = Pose{p, before + a};
-    position[i] = p;
-    orientation[i] = Q * r.restOrientation;  // both of unit length: so is the product
+    position[order[i]] = p;
+    orientation[order[i]] = Q * r.restOrientation;  // both of unit length: so is the product
   };
-  for (uint32_t i : topNodes_) composeNode(i);
-  const uint32_t* const taskNodes = taskNodes_.data();
+  const size_t top = topCount_;
+  for (size_t i = 0; i < top; ++i) composeNode(i);
   const uint32_t* const taskStart = taskStart_.data();
   parallelFor(size_t(0), taskStart_.size() - 1, [=](size_t k) {
-    for (size_t e = taskStart[k]; e < taskStart[k + 1]; ++e) composeNode(taskNodes[e]);
+    for (size_t i = top + taskStart[k]; i < top + taskStart[k + 1]; ++i) composeNode(i);
   }, 1);
 }
 
@@ -430,7 +460,7 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   // Plain pointers, as in compose().
   LeafMotionState* const leaves = leaves_.data();
   const uint64_t* const keys = leafKey_.data();
-  const int32_t* const leafNode = rest_.leafNode.data();
+  const uint32_t* const leafNode = leafNode_.data();
   const Quat* const restRotation = leafRest_.data();
   const float* const speed = speed_.data();
   const uint32_t* const slot = k == m ? nullptr : slot_.data();  // none torn off: leaf j is posed leaf j

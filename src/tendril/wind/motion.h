@@ -56,13 +56,13 @@ class WindMotion {
   // topology, primitive meshes) is copied from the rest plant only into a new `posed`.
   void step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed);
 
-  // The sway angle of every node in the last step (rad).
-  const std::vector<float>& swayAngles() const { return angle_; }
+  // Node i's sway angle in the last step (rad).
+  float swayAngle(size_t i) const { return angle_[internal_[i]]; }
   const std::vector<LeafMotionState>& leaves() const { return leaves_; }
   uint32_t frame() const { return frame_; }
   const plant::PlantModel& rest() const { return rest_; }
-  // Posed rigid transform of every node's subtree in the last step: x ↦ rotation·x + translation.
-  const std::vector<Quat>& nodeRotation() const { return Q_; }
+  // Posed rigid transform of node i's subtree in the last step: x ↦ rotation·x + translation.
+  const Quat& nodeRotation(size_t i) const { return Q_[internal_[i]]; }
   // Computed when asked (the step itself carries positions, not translations).
   std::vector<Vec3> nodeTranslation() const;
 
@@ -73,7 +73,7 @@ class WindMotion {
   struct alignas(64) SwayNode {
     Quat restOrientation;  // normalised
     Vec3 offset;           // rest position minus the parent's (a root: its rest position)
-    int32_t parent;
+    int32_t parent;        // internal index (see order_)
     Vec3 axis;             // unit b × w, the sway axis
     float steady;          // min(θ*, maxSwayAngle) before the ease; 0: does not sway
     float sinToWind;       // |b̂ × ŵ|
@@ -94,13 +94,15 @@ class WindMotion {
   MotionSettings settings_;
   uint32_t frame_ = 0;
 
+  // Nodes are kept in the order the passes visit them (the top part, then task after task):
+  // node i of the plant is internal node internal_[i], internal node k is the plant's order_[k].
+  // Every per-node array (nodes_ and those below) is in internal order.
+  std::vector<uint32_t> order_;
+  std::vector<uint32_t> internal_;
   std::vector<SwayNode> nodes_;
   // Per node, from the rest pose, for the torques.
   std::vector<float> stiffness_;   // k (N·m/rad)
-  std::vector<float> area_;        // projected branch area + leaf area (m²)
   std::vector<Vec3> centre_;       // centre of gravity of the segment (world, rest)
-  std::vector<Vec3> direction_;    // unit segment direction b̂ (world, rest)
-  std::vector<uint8_t> held_;      // grows on a support: does not sway
   // The drag's inputs for nodes 4b … 4b + 3, lane l for node 4b + l: b̂, the lever from the
   // node to the centre of gravity, the projected areas of the segment (2 r l) and of its
   // leaves, and whether the node may sway (not held by a support: all bits set).
@@ -129,13 +131,13 @@ class WindMotion {
   // thousand nodes (tasks, their nodes in index order) hang below a top part. Every node's
   // arithmetic, sums over children included, happens in the same order as a sequential pass,
   // so results do not depend on the split or the thread count.
-  std::vector<uint32_t> topNodes_;    // not in any task, ascending
-  std::vector<uint32_t> mergeNodes_;  // top nodes and task roots, ascending
-  std::vector<uint32_t> taskNodes_;   // every task's nodes, task after task, ascending within
-  std::vector<uint32_t> taskStart_;   // task k owns taskNodes_[taskStart_[k], taskStart_[k + 1])
+  size_t topCount_ = 0;               // internal nodes [0, topCount_): not in any task
+  std::vector<uint32_t> mergeNodes_;  // top nodes and task roots (internal), by plant index
+  std::vector<uint32_t> taskStart_;   // task k: internal nodes topCount_ + [taskStart_[k], taskStart_[k + 1])
   // Per leaf.
   std::vector<LeafMotionState> leaves_;
   std::vector<Quat> leafRest_;     // rest rotation, normalised
+  std::vector<uint32_t> leafNode_; // the (internal) node the leaf hangs on
   std::vector<uint64_t> leafKey_;  // random key of the leaf's motion; each frame mixes in its number
   std::vector<uint32_t> kept_;     // leaves still attached, in order
   std::vector<uint32_t> slot_;     // per leaf: its index in kept_ (the posed plant's leaf)
