@@ -20,3 +20,4 @@ save particles particles.json "$work/none.json" 8
 save lsystem lsystem.json "$work/none.json" 3
 save gusty gusty.json "$work/none.json" 4
 save air air.json "$work/none.json" 4
+save air-position-based air-position-based.json "$work/none.json" 4
