@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 namespace tendril::env {
 namespace {
 
@@ -46,6 +48,28 @@ TEST(Environment, RayCastHitsBoxFaceWithOutwardNormal) {
   EXPECT_EQ(env.countSegmentHits(Vec3(0, 0, 0), Vec3(0, 0, 10)), 2u);
   EXPECT_EQ(env.countSegmentHits(Vec3(0, 0, 0), Vec3(0, 0, 5)), 1u);
   EXPECT_EQ(env.countSegmentHits(Vec3(0, 0, 0), Vec3(0, 0, 4)), 0u);
+}
+
+TEST(Environment, RaysEmbreeCannotTakeHitNothing) {
+  // A plant gone wrong (a turtle or particle far out or NaN) asks about rays Embree refuses
+  // (its assertion would abort the process): they hit nothing, and the ray beside them still hits.
+  Environment env;
+  env.addObstacle(def("box", makeBox(Vec3(1, 1, 1)), {Quat::Identity(), Vec3(0, 0, 5)}));
+  env.commit();
+  const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+  const Vec3 z = Vec3::UnitZ();
+  for (const Vec3& origin : {Vec3(nan, 0, 0), Vec3(0, 0, -1e30f), Vec3(0, inf, 0)}) {
+    EXPECT_FALSE(env.rayCast(origin, z, 100.0f));
+    EXPECT_FALSE(env.occluded(origin, z, 100.0f));
+    const Vec3 to = origin + Vec3(0, 0, 10);
+    EXPECT_FALSE(env.anySegmentBlocked(&origin, &to, 1));
+  }
+  EXPECT_FALSE(env.rayCast(Vec3::Zero(), Vec3(0, nan, 1), 100.0f));
+  EXPECT_FALSE(env.rayCast(Vec3::Zero(), Vec3(0, 0, 3e18f), 100.0f));
+  EXPECT_FALSE(env.rayCast(Vec3::Zero(), z, nan));
+  EXPECT_FALSE(env.occluded(Vec3::Zero(), z, 100.0f, nan));
+  EXPECT_TRUE(env.rayCast(Vec3::Zero(), z, inf));
+  EXPECT_TRUE(env.occluded(Vec3::Zero(), z, 100.0f));
 }
 
 TEST(Environment, ClosestPointMatchesBruteForce) {

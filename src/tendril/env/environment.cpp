@@ -165,6 +165,15 @@ void runClosest(RTCScene scene, ClosestSearch& s, float radius) {
   rtcPointQuery(scene, &q, &ctx, closestCallback, &s);
 }
 
+// A ray Embree accepts (it asserts on others; RayK::valid): origin and direction components
+// within ±1.844e18 and no NaN among them or the interval's ends. Others hit nothing.
+bool rayAccepted(const Vec3& origin, const Vec3& dir, float tMin, float tMax) {
+  constexpr float kLarge = 1.844e18f;
+  for (int c = 0; c < 3; ++c)
+    if (!(std::fabs(origin[c]) <= kLarge && std::fabs(dir[c]) <= kLarge)) return false;
+  return !std::isnan(tMin) && !std::isnan(tMax);
+}
+
 // Directions spread evenly over a cone (Fibonacci spiral): deterministic soft-shadow samples.
 Vec3 coneSample(const Vec3& axis, float halfAngle, int i, int n) {
   if (n <= 1 || halfAngle <= 0.0f) return axis;
@@ -356,7 +365,7 @@ void Environment::commit() {
 
 std::optional<RayHit> Environment::rayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
-  if (obstacles_.empty()) return std::nullopt;
+  if (obstacles_.empty() || !rayAccepted(origin, dir, tMin, tMax)) return std::nullopt;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -388,7 +397,7 @@ std::optional<RayHit> Environment::rayCast(const Vec3& origin, const Vec3& dir, 
 
 bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
-  if (obstacles_.empty()) return false;
+  if (obstacles_.empty() || !rayAccepted(origin, dir, tMin, tMax)) return false;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay ray;
@@ -427,6 +436,7 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
     float len = d.norm();
     if (!(len > 0.0f)) continue;
     d /= len;
+    if (!rayAccepted(from[i], d, 0.0f, len)) continue;
     ray.org_x = from[i].x();
     ray.org_y = from[i].y();
     ray.org_z = from[i].z();
