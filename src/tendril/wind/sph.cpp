@@ -1434,6 +1434,37 @@ void obstacleAfterMove(Grid& g, const env::Environment& env, size_t k, float mov
   }
 }
 
+// A substep's first passes in both solvers: the density (with the neighbour search), then the
+// plants', then the pair counts. The position-based solver keeps the plants' density and
+// gradient for the whole substep and sizes each block's |∇W|/r store to its lists.
+template <bool PositionBased, class Grid, class Walls, class Plants>
+void densityAndPlantPasses(Grid& g, const Walls& W, const Plants& P, const PassConstants& c, size_t blocks,
+                           [[maybe_unused]] bool avx2, SphTimings& timings) {
+  {
+    ScopedTimer t(&timings.density);
+    parallelFor(0, blocks, [&](size_t block) {
+#if TENDRIL_SPH_AVX2
+      if (avx2) densityAvx2(g, W, c, block);
+      else
+#endif
+        densityGeneric(g, W, c, block);
+      if constexpr (PositionBased) g.pairBlocks[block].resize(g.nbrBlocks[block].size());  // lists' length and padding
+    }, 1);
+  }
+  {
+    ScopedTimer t(&timings.coupling);
+    parallelFor(0, blocks, [&](size_t block) {
+#if TENDRIL_SPH_AVX2
+      if (avx2) return plantAvx2<PositionBased>(g, P, c, block);
+#endif
+      plantGeneric<PositionBased>(g, P, c, block);
+    }, 1);
+  }
+  const size_t n = g.size();
+  timings.particles += n;
+  for (size_t k = 0; k < n; ++k) timings.airPairs += g.nbrCount[k], timings.plantPairs += g.hitCount[k];
+}
+
 }  // namespace
 
 void SphAir::substep(const env::Environment& env, float dt) {
@@ -1447,27 +1478,7 @@ void SphAir::substep(const env::Environment& env, float dt) {
   g.invRho.resize(n), g.pOverRho.resize(n), g.packedX.resize(n), g.packedV.resize(n), g.plantAcc.resize(n);
   const bool avx2 = useAvx2();
 
-  {
-    ScopedTimer t(&timings_.density);
-    parallelFor(0, blocks, [&](size_t block) {
-#if TENDRIL_SPH_AVX2
-      if (avx2) return densityAvx2(g, W, c, block);
-#endif
-      densityGeneric(g, W, c, block);
-    }, 1);
-  }
-  {
-    ScopedTimer t(&timings_.coupling);
-    parallelFor(0, blocks, [&](size_t block) {
-#if TENDRIL_SPH_AVX2
-      if (avx2) return plantAvx2<false>(g, P, c, block);
-#endif
-      plantGeneric<false>(g, P, c, block);
-    }, 1);
-  }
-
-  timings_.particles += n;
-  for (size_t k = 0; k < n; ++k) timings_.airPairs += g.nbrCount[k], timings_.plantPairs += g.hitCount[k];
+  densityAndPlantPasses<false>(g, W, P, c, blocks, avx2, timings_);
 
   {
     ScopedTimer t(&timings_.forces);
@@ -1555,28 +1566,7 @@ void SphAir::substepPositionBased(const env::Environment& env, float dt) {
   g.plantRho.resize(n), g.plantGrad.resize(n), g.extGrad.resize(n);
   g.lambdaSum.assign(n, 0.0f), g.shift.assign(n, Vec3::Zero());
   const bool avx2 = useAvx2();
-  {
-    ScopedTimer t(&timings_.density);
-    parallelFor(0, blocks, [&](size_t block) {
-#if TENDRIL_SPH_AVX2
-      if (avx2) densityAvx2(g, W, c, block);
-      else
-#endif
-        densityGeneric(g, W, c, block);
-      g.pairBlocks[block].resize(g.nbrBlocks[block].size());  // the lists' length and their padding
-    }, 1);
-  }
-  {
-    ScopedTimer t(&timings_.coupling);
-    parallelFor(0, blocks, [&](size_t block) {
-#if TENDRIL_SPH_AVX2
-      if (avx2) return plantAvx2<true>(g, P, c, block);
-#endif
-      plantGeneric<true>(g, P, c, block);
-    }, 1);
-  }
-  timings_.particles += n;
-  for (size_t k = 0; k < n; ++k) timings_.airPairs += g.nbrCount[k], timings_.plantPairs += g.hitCount[k];
+  densityAndPlantPasses<true>(g, W, P, c, blocks, avx2, timings_);
 
   const float invDt = 1.0f / dt;
   {
