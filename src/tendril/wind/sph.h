@@ -5,11 +5,12 @@
 // p = c²(ρ − ρ0) with the spiky kernel's gradient, viscosity with the viscosity kernel's
 // Laplacian (seed 000 eq. 11–12). Or (SphSolver::PositionBased) the pressure as the
 // multiplier of the density constraint ρ = ρ0, solved by position projections (Macklin &
-// Müller 2013, "Position Based Fluids"), in a third of the substeps. Grown branch particles of a ParticleWorld take part through
-// an anisotropic kernel W(G(x − x_j)) whose tensor G comes from the particle's ellipsoid
-// (eq. 13, after Owen et al. 1997): they add to the air's density and push it by pressure
-// like boundary particles, and they drag the air with a stem's cross-flow drag; the equal and
-// opposite force becomes the plant particle's external acceleration a_e in eq. 1.
+// Müller 2013, "Position Based Fluids"), in a third of the substeps. Grown branch particles
+// of a ParticleWorld take part through an anisotropic kernel W(G(x − x_j)) whose tensor G
+// comes from the particle's ellipsoid (eq. 13, after Owen et al. 1997): they add to the air's
+// density and push it by pressure like boundary particles, and they drag the air with a
+// stem's cross-flow drag; the equal and opposite force becomes the plant particle's external
+// acceleration a_e in eq. 1.
 // Obstacles come from the Environment's signed distances; each face of the domain box is
 // either closed (a wall) or open (particles leaving through it are removed).
 //
