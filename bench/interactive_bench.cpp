@@ -5,6 +5,7 @@
 // steps). Results and commands: bench/README.md.
 #include "tendril/core/timer.h"
 #include "tendril/mesh/leaf_mesh.h"
+#include "support/particle_session.h"
 #include "tendril/particles/world.h"
 #include "tendril/render/plant_instances.h"
 #include "tendril/session/session.h"
@@ -53,7 +54,7 @@ Grown& grown(size_t target) {
   Timer t;
   const char* file = target <= 5000 ? "interactive-5k.json" : "interactive-25k.json";
   g.session = session::Session::open(std::filesystem::path(__FILE__).parent_path() / "scenes" / file);
-  const particles::ParticleWorld* world = g.session->particleWorld();
+  const particles::ParticleWorld* world = test::particleWorld(*g.session);
   size_t last = 0;
   for (int step = 0, still = 0; step < 3000 && world->particleCount() < target * 97 / 100 && still < 50; ++step) {
     g.session->step();
@@ -108,7 +109,7 @@ void BM_InteractiveFrame(benchmark::State& state) {
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2] * 1e3;
   };
-  state.counters["particles"] = double(s.particleWorld()->particleCount());
+  state.counters["particles"] = double(test::particleWorld(s)->particleCount());
   state.counters["segments"] = double(nodes);
   state.counters["leaves"] = double(leafCount);
   state.counters["median_ms"] = medianMs(total);

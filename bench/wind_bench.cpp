@@ -35,7 +35,7 @@ void BM_WindMotion(benchmark::State& state) {
   s.mode = gusty ? env::WindMode::Gusty : env::WindMode::Constant;
   s.velocity = Vec3(9, 0, 3);
   env::WindField wind(s);
-  wind::WindMotion motion(rest, wind::GrowthFlowSpecies{});
+  wind::WindMotion motion(rest, plant::GrowthFlowSpecies{});
   plant::PlantModel posed;
   float t = 0.0f;
   for (auto _ : state) {

@@ -1,5 +1,5 @@
-# Every third-party package Tendril uses, found once and gathered in the interface target
-# tendril_deps. All are Debian 12 packages installed by scripts/setup.
+# Every third-party package Tendril uses, found once; cmake/Modules.cmake links each to the
+# modules that use it. All are Debian 12 packages installed by scripts/setup.
 find_package(Eigen3 3.4 REQUIRED NO_MODULE)
 find_package(embree 3 REQUIRED)
 find_package(TBB REQUIRED)
@@ -18,7 +18,3 @@ pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)
 pkg_check_modules(EPOXY REQUIRED IMPORTED_TARGET epoxy)
 find_package(OpenGL REQUIRED COMPONENTS EGL)
 
-add_library(tendril_deps INTERFACE)
-target_link_libraries(tendril_deps INTERFACE
-  Eigen3::Eigen embree TBB::tbb nlohmann_json::nlohmann_json assimp::assimp TinyGLTF::TinyGLTF
-  spdlog::spdlog fmt::fmt PkgConfig::MUPARSER PkgConfig::STB PkgConfig::EPOXY OpenGL::EGL Threads::Threads)

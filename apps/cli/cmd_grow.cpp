@@ -8,7 +8,7 @@
 #include "tendril/core/progress.h"
 #include "tendril/core/timer.h"
 #include "tendril/io/export_model.h"
-#include "tendril/io/gltf_animation.h"
+#include "tendril/wind/gltf_animation.h"
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
 #include "tendril/plant/plant_model.h"
@@ -84,21 +84,21 @@ int runGrow(const GrowOptions& o) {
   // A looping clip of the grown plants moving in the scene's wind (Growth-Flow motion).
   float clipSeconds = o.windAnimation >= 0.0 ? float(o.windAnimation) : sc.output.animationSeconds;
   if (clipSeconds > 0.0f) {
-    std::vector<wind::GrowthFlowSpecies> species = session.growthFlow();
-    std::vector<io::AnimatedPlant> animated;
+    std::vector<plant::GrowthFlowSpecies> species = session.growthFlow();
+    std::vector<wind::AnimatedPlant> animated;
     for (size_t i = 0; i < exportScene.plants.size(); ++i) animated.push_back({&exportScene.plants[i], species[i]});
-    io::WindAnimationOptions a;
+    wind::WindAnimationOptions a;
     a.seconds = clipSeconds;
     a.fps = sc.output.animationFps;
     a.maxJoints = sc.output.animationJoints;
     a.seed = sc.seed;
     a.mesh = options.mesh;
     std::filesystem::path file = outDir / "plant-wind.glb";
-    io::writeWindAnimationGlb(animated, session.environment().windField(), a, file);
+    wind::writeWindAnimationGlb(animated, session.environment().windField(), a, file);
     written.push_back(file.string());
     // The per-step sequence: the same motion frame by frame, leaves moving on their own.
     if (o.windFrames)
-      for (std::filesystem::path& f : io::writeWindFrames(animated, session.environment().windField(), a, outDir, "plant-wind"))
+      for (std::filesystem::path& f : wind::writeWindFrames(animated, session.environment().windField(), a, outDir, "plant-wind"))
         written.push_back(f.string());
   }
 

@@ -7,7 +7,6 @@
 #include "tendril/core/json_reader.h"
 #include "tendril/graph/graph_model.h"
 #include "tendril/lsystem/lsystem_model.h"
-#include "tendril/particles/world.h"
 
 #include <fmt/format.h>
 #include <imgui.h>
@@ -297,7 +296,7 @@ void Studio::Impl::drawPlantPanel(uint32_t p) {
     return;
   }
   const plant::PlantModel& m = plants[p];
-  const scene::PlantSpec& spec = session->plantSpec(p);
+  const models::PlantSpec& spec = session->plantSpec(p);
   ImGui::Text("%s  (model %s)", m.name.c_str(), spec.model.c_str());
   ImGui::Text("%zu segments, %zu leaves", m.nodeCount(), m.leafCount());
   if (selection.node && *selection.node < m.nodeCount()) {
@@ -305,8 +304,8 @@ void Studio::Impl::drawPlantPanel(uint32_t p) {
     ImGui::Text("segment %u: length %.3f m, radius %.4f m, age %.1f s", n, m.length[n], m.radius[n], m.age[n]);
   }
   ImGui::Separator();
-  if (spec.model == "particles") {
-    drawParticleSpecies(p);
+  if (const models::LiveSettings* live = std::as_const(session->system(p)).liveSettings()) {
+    drawLiveSettings(p, *live);
     return;
   }
   if (spec.model == "lsystem") {
@@ -364,50 +363,40 @@ void Studio::Impl::drawPlantPanel(uint32_t p) {
   }
 }
 
-// Table 2 of seed 000 and the material and growth settings beside it, applied live through
-// SetSpecies edits when a field is released.
-void Studio::Impl::drawParticleSpecies(uint32_t p) {
-  const particles::ParticleWorld* world = session->particleWorld();
-  if (!world) return;
-  const particles::ParticleSpecies& s = world->species(uint32_t(session->indexInSystem(p)));
-  ImGui::Text("Species %s", s.name.c_str());
-  ImGui::TextDisabled("Table 2: N = %zu plant(s) in the scene", session->plantCount());
+// A model's live settings (models::LiveSettings), applied through SetSpecies edits when a
+// field is released.
+void Studio::Impl::drawLiveSettings(uint32_t p, const models::LiveSettings& settings) {
+  const size_t inSystem = session->indexInSystem(p);
+  ImGui::Text("%s", settings.settingsTitle(inSystem).c_str());
+  ImGui::TextDisabled("N = %zu plant(s) in the scene", session->plantCount());
   ImGui::PushItemWidth(150);
-  auto floatKey = [&](const char* label, const char* key, float value, float lo, float hi, const char* format = "%.3f") {
-    float v = value;
-    ImGui::SliderFloat(label, &v, lo, hi, format);
-    if (ImGui::IsItemDeactivatedAfterEdit() && v != value) {
+  std::string group;
+  for (const models::LiveSettings::Setting& f : settings.liveSettings(inSystem)) {
+    if (f.group != group) {
+      if (!group.empty()) ImGui::Separator();
+      group = f.group;
+    }
+    bool released = false;
+    double value = f.value;
+    if (f.integer) {
+      int v = int(f.value);
+      ImGui::SliderInt(f.label.c_str(), &v, int(f.min), int(f.max));
+      released = ImGui::IsItemDeactivatedAfterEdit() && v != int(f.value);
+      value = v;
+    } else {
+      float v = float(f.value);
+      const std::string format = fmt::format("%.{}f", f.decimals);
+      ImGui::SliderFloat(f.label.c_str(), &v, float(f.min), float(f.max), format.c_str());
+      released = ImGui::IsItemDeactivatedAfterEdit() && v != float(f.value);
+      value = v;
+    }
+    if (released) {
       session::SetSpecies edit;
       edit.plant = p;
-      edit.keys = Json::object({{key, v}});
+      edit.keys = f.integer ? Json::object({{f.key, int64_t(value)}}) : Json::object({{f.key, float(value)}});
       apply(edit);
     }
-  };
-  int buds = s.maxLateralBuds;
-  ImGui::SliderInt("B lateral buds", &buds, 0, 8);
-  if (ImGui::IsItemDeactivatedAfterEdit() && buds != s.maxLateralBuds) {
-    session::SetSpecies edit;
-    edit.plant = p;
-    edit.keys = Json::object({{"lateral_buds", buds}});
-    apply(edit);
   }
-  floatKey("BP branch probability", "branch_probability", s.branchProbability, 0.0f, 1.0f);
-  floatKey("V branch variance", "branch_variance", s.branchVariance, 0.0f, 1.0f);
-  floatKey("Ph phototropism", "phototropism", s.phototropism, 0.0f, 2.0f);
-  ImGui::Separator();
-  floatKey("growth rate (m/s)", "growth_rate", s.growthRate, 0.0f, 0.1f, "%.4f");
-  floatKey("growth speed", "growth_speed", s.growthSpeed, 0.0f, 100.0f, "%.1f");
-  floatKey("particle length (m)", "particle_length", s.particleLength, 0.005f, 0.5f, "%.3f");
-  floatKey("surface adaption", "surface_adaption", s.surfaceAdaption, 0.0f, 1.0f);
-  floatKey("random walk", "random_walk", s.randomWalk, 0.0f, 1.0f);
-  floatKey("attraction", "attraction", s.attraction, 0.0f, 5.0f);
-  floatKey("spreading", "spreading", s.spreading, 0.0f, 5.0f);
-  ImGui::Separator();
-  floatKey("stiffness", "stiffness", s.stiffness, 0.0f, 1.0f);
-  floatKey("break threshold", "break_threshold", s.breakThreshold, 0.0f, 1.0f);
-  floatKey("max strain", "max_strain", s.maxStrain, 0.01f, 2.0f);
-  floatKey("anchor strength", "anchor_strength", s.anchorStrength, 0.0f, 0.99f);
-  floatKey("damping", "damping", s.damping, 0.0f, 1.0f);
   ImGui::PopItemWidth();
 }
 
@@ -559,10 +548,9 @@ void Studio::Impl::drawTimeline() {
 }
 
 void Studio::Impl::drawStatus() {
-  const particles::ParticleWorld* world = session->particleWorld();
-  ImGui::Text("%zu particles  |  %zu segments  |  step %.1f ms  |  frame %.1f ms (sim %.1f, update %.1f, draw %.1f)  "
+  ImGui::Text("%zu plants  |  %zu segments  |  step %.1f ms  |  frame %.1f ms (sim %.1f, update %.1f, draw %.1f)  "
               "|  %s  |",
-              world ? world->particleCount() : size_t(0), session->segmentCount(), lastStepMs, timing.frame,
+              session->plantCount(), session->segmentCount(), lastStepMs, timing.frame,
               timing.simulation, timing.update, timing.draw, toolName(tool));
   ImGui::SameLine();
   if (statusIsError) ImGui::TextColored(ImVec4(1, 0.45f, 0.4f, 1), "%s", status.c_str());

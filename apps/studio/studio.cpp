@@ -8,7 +8,6 @@
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/image.h"
 #include "tendril/io/obj_writer.h"
-#include "tendril/particles/world.h"
 #include "tendril/session/session_file.h"
 
 #include <epoxy/gl.h>
@@ -314,7 +313,8 @@ void Studio::Impl::beginGesture(const Vec2& pixel) {
         return;
       }
       if (node->particle == session::kNoParticle) {
-        status = fmt::format("{}: only particle plants (model \"particles\") can be held", toolName(tool));
+        status = fmt::format("{}: plants of model \"{}\" cannot be held", toolName(tool),
+                             session->plantSpec(node->plant).model);
         statusIsError = true;
         return;
       }
@@ -477,11 +477,11 @@ void Studio::Impl::endGesture(const Vec2& pixel) {
   }
 }
 
-// Stress colours of the plant being dragged (seed 000 fig. 6): the strain |d − d̄| / d̄ of each
-// segment's connection to its parent, as the particle world measures it for breaking, minus
-// what it was when the drag began (growth alone leaves connections strained, and that is not
-// the drag's doing), scaled so that the species' breaking strain is red. Segments are matched
-// to their particles by position: a snapshot node's centre is its particle's position.
+// Stress colours of the plant being dragged (seed 000 fig. 6): the strain of each segment's
+// connection to its parent as the model's breaking rule measures it (models::StrainGauge, as a
+// fraction of the strain at which it breaks), minus what it was when the drag began (growth
+// alone leaves connections strained, and that is not the drag's doing), so that red is where
+// the drag brings a connection to breaking.
 void Studio::Impl::updateStress() {
   if (!editor->dragging() || !dragPlant) {
     if (dragPlant) view.setStress(*dragPlant, {});
@@ -491,52 +491,22 @@ void Studio::Impl::updateStress() {
   }
   const uint32_t plant = *dragPlant;
   const auto& plants = view.plants();
-  const particles::ParticleWorld* world = session->particleWorld();
-  if (plant >= plants.size() || plant >= session->plantCount() || !world) return;
-  const plant::PlantModel& m = plants[plant];
-  const uint32_t worldPlant = uint32_t(session->indexInSystem(plant));
-  const particles::ParticleSpecies& species = world->species(worldPlant);
-  const float full = std::max(1e-4f, species.maxStrain * (species.breakThreshold > 0.0f ? 1.0f - species.breakThreshold
-                                                                                        : 1.0f));
-  // Particles of the plant by position, in cells of 0.1 mm.
-  constexpr float kCell = 1e-4f;
-  auto cellOf = [](const Vec3& p) {
-    return Eigen::Vector3i(int(std::floor(p.x() / kCell)), int(std::floor(p.y() / kCell)), int(std::floor(p.z() / kCell)));
-  };
-  auto key = [](const Eigen::Vector3i& c) {
-    return (uint64_t(uint32_t(c.x()) & 0x1fffff) << 42) | (uint64_t(uint32_t(c.y()) & 0x1fffff) << 21) |
-           uint64_t(uint32_t(c.z()) & 0x1fffff);
-  };
-  std::unordered_multimap<uint64_t, uint32_t> byCell;
-  for (uint32_t i = 0; i < world->capacity(); ++i)
-    if (world->active(i) && world->plantOf(i) == worldPlant && !(world->flags(i) & particles::kLeaf))
-      byCell.emplace(key(cellOf(world->position(i))), i);
+  if (plant >= plants.size() || plant >= session->plantCount()) return;
+  const models::StrainGauge* gauge = std::as_const(session->system(plant)).strainGauge();
+  if (!gauge) return;
+  const std::vector<models::StrainGauge::NodeStrain> strain = gauge->nodeStrain(session->indexInSystem(plant));
   const bool first = strainAtDragStart.empty();
-  std::vector<float> stress(m.nodeCount(), 0.0f);
-  for (size_t n = 0; n < m.nodeCount(); ++n) {
-    const Vec3 centre = m.position[n] + m.orientation[n] * Vec3(0, 0.5f * m.length[n], 0);
-    const Eigen::Vector3i c = cellOf(centre);
-    uint32_t best = particles::kNone;
-    float bestDistance = kCell;
-    for (int dx = -1; dx <= 1; ++dx)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dz = -1; dz <= 1; ++dz) {
-          auto range = byCell.equal_range(key(c + Eigen::Vector3i(dx, dy, dz)));
-          for (auto it = range.first; it != range.second; ++it) {
-            float d = (world->position(it->second) - centre).norm();
-            if (d < bestDistance) bestDistance = d, best = it->second;
-          }
-        }
-    // Growing apices are not judged for breaking either (particles/dynamics.cpp).
-    if (best == particles::kNone || (world->flags(best) & particles::kApex)) continue;
-    const float strain = world->strain(best);
+  std::vector<float> stress(plants[plant].nodeCount(), 0.0f);
+  for (size_t n = 0; n < strain.size() && n < stress.size(); ++n) {
+    const models::StrainGauge::NodeStrain& s = strain[n];
+    if (s.handle == models::kNoHandle) continue;
     if (first) {
-      strainAtDragStart[best] = strain;
+      strainAtDragStart[s.handle] = s.strain;
       continue;
     }
-    auto before = strainAtDragStart.find(best);
+    auto before = strainAtDragStart.find(s.handle);
     if (before == strainAtDragStart.end()) continue;  // grew during the drag
-    stress[n] = std::clamp((strain - before->second) / full, 0.0f, 1.0f);
+    stress[n] = std::clamp(s.strain - before->second, 0.0f, 1.0f);
   }
   view.setStress(plant, std::move(stress));
 }
@@ -619,10 +589,9 @@ int Studio::Impl::run() {
     window.swap();
     timing.frame = frameTimer.milliseconds();
     if (options.stats) {
-      const particles::ParticleWorld* world = session->particleWorld();
-      std::printf("frame %llu: step %u, %zu particles, %zu segments, simulation %.2f ms, update %.2f ms "
+      std::printf("frame %llu: step %u, %zu plants, %zu segments, simulation %.2f ms, update %.2f ms "
                   "(snapshots %.2f, instances %.2f, upload %.2f), draw %.2f ms, frame %.2f ms\n",
-                  (unsigned long long)frameCount, session->stepCount(), world ? world->particleCount() : size_t(0),
+                  (unsigned long long)frameCount, session->stepCount(), session->plantCount(),
                   session->segmentCount(), timing.simulation, timing.update, view.snapshotMs(), fs.buildMs,
                   fs.uploadMs, timing.draw, timing.frame);
       std::fflush(stdout);

@@ -76,7 +76,7 @@ struct Studio::Impl {
   void drawSceneTree();
   void drawInspector();
   void drawPlantPanel(uint32_t plant);
-  void drawParticleSpecies(uint32_t plant);
+  void drawLiveSettings(uint32_t plant, const models::LiveSettings& settings);
   void drawObstaclePanel(uint32_t obstacle);
   void drawLightPanel(uint32_t light);
   void drawEmitterPanel(uint32_t emitter);
@@ -107,7 +107,7 @@ struct Studio::Impl {
   Tool tool = Tool::View;
   Gesture gesture;
   std::optional<uint32_t> dragPlant;  // the plant of the drag under way (interactive or scripted)
-  std::unordered_map<uint32_t, float> strainAtDragStart;  // particle id → strain when it began
+  std::unordered_map<uint32_t, float> strainAtDragStart;  // held part (models::Grip handle) → strain when it began
   bool playing = true;
   bool showAir = true;  // the simulated air's streaks (wind mode sph)
   int speed = 1;

@@ -1,8 +1,8 @@
-// The four-lane shape-matching arithmetic (particles/match_lanes.h) gives, lane for lane, the
+// The four-lane shape-matching arithmetic (core/match_lanes.h) gives, lane for lane, the
 // same bits as the Eigen expressions of the scalar fit it stands in for: otherwise a plant's
 // motion would depend on how its particles happen to fall into groups of four.
 #include "tendril/core/random.h"
-#include "tendril/particles/match_lanes.h"
+#include "tendril/core/match_lanes.h"
 #include "tendril/particles/shape_matching.h"
 
 #include <gtest/gtest.h>

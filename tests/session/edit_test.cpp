@@ -1,6 +1,7 @@
 // Edits with undo/redo: every edit changes what a user would see, undo restores the exact
 // previous state (hash of every plant and the environment), redo brings the edit back.
 #include "session/session_test_util.h"
+#include "support/particle_session.h"
 #include "tendril/core/error.h"
 #include "tendril/particles/world.h"
 #include "tendril/session/edit.h"
@@ -14,7 +15,7 @@ using namespace session;
 
 // A grown branch particle of plant 0 (a particle plant): the one farthest from the root.
 uint32_t grownParticle(const Session& s) {
-  const particles::ParticleWorld& w = *s.particleWorld();
+  const particles::ParticleWorld& w = *test::particleWorld(s);
   uint32_t best = particles::kNone;
   for (uint32_t i = 0; i < w.capacity(); ++i) {
     const uint32_t f = w.flags(i);
@@ -114,9 +115,9 @@ TEST_F(EditFixture, SeedBranchOnAGrownParticle) {
   const uint32_t p = grownParticle(*session);
   ASSERT_NE(p, particles::kNone);
   checkUndoRedo(SeedBranch{0, p, Vec3(1, 0.5f, 0)});
-  const size_t before = session->particleWorld()->particleCount();
+  const size_t before = test::particleWorld(*session)->particleCount();
   editor->apply(SeedBranch{0, p, Vec3(1, 0.5f, 0)});
-  EXPECT_EQ(session->particleWorld()->particleCount(), before + 1);
+  EXPECT_EQ(test::particleWorld(*session)->particleCount(), before + 1);
   EXPECT_THROW(editor->apply(SeedBranch{1, p, Vec3::UnitX()}), Error);  // plant 1 is a climbing plant
   EXPECT_THROW(editor->apply(SeedBranch{0, 1u << 30, Vec3::UnitX()}), Error);
 }
@@ -145,13 +146,13 @@ TEST_F(EditFixture, DragGestureIsOneUndoEntry) {
   ASSERT_NE(p, particles::kNone);
   const uint64_t before = session->stateHash();
   const size_t depth = editor->undoDepth();
-  const Vec3 start = session->particleWorld()->position(p);
+  const Vec3 start = test::particleWorld(*session)->position(p);
   editor->apply(DragBegin{0, p, start + Vec3(0.05f, 0, 0.05f), 0.5f});
   EXPECT_TRUE(editor->dragging());
   editor->step(3);
   editor->apply(DragMove{start + Vec3(0.1f, 0.05f, 0.1f)});
   editor->step(3);
-  EXPECT_GT(session->particleWorld()->strain(p), 0.0f);
+  EXPECT_GT(test::particleWorld(*session)->strain(p), 0.0f);
   editor->apply(DragEnd{});
   EXPECT_FALSE(editor->dragging());
   EXPECT_EQ(editor->undoDepth(), depth + 1);
@@ -168,12 +169,12 @@ TEST_F(EditFixture, PaintStrokeNearAGrownParticleSeedsABranch) {
   ASSERT_NE(p, particles::kNone);
   PaintStroke e;
   e.stroke.radius = 0.2f;
-  e.stroke.points = {session->particleWorld()->head(p) + Vec3(0.05f, 0, 0)};
+  e.stroke.points = {test::particleWorld(*session)->head(p) + Vec3(0.05f, 0, 0)};
   checkUndoRedo(e);
-  const size_t before = session->particleWorld()->particleCount();
+  const size_t before = test::particleWorld(*session)->particleCount();
   editor->apply(e);
   EXPECT_EQ(session->environment().strokes().size(), 1u);
-  EXPECT_EQ(session->particleWorld()->particleCount(), before + 1);
+  EXPECT_EQ(test::particleWorld(*session)->particleCount(), before + 1);
   PaintStroke repel = e;
   repel.stroke.attract = false;
   checkUndoRedo(repel);
@@ -218,7 +219,7 @@ TEST_F(EditFixture, LiveSpeciesOfParticlePlants) {
   e.keys = Json{{"particle_length", 0.06}};
   checkUndoRedo(e, false);
   editor->apply(e);
-  EXPECT_FLOAT_EQ(session->particleWorld()->species(0).particleLength, 0.06f);
+  EXPECT_FLOAT_EQ(test::particleWorld(*session)->species(0).particleLength, 0.06f);
   editor->step(5);
   SetSpecies typo;
   typo.plant = 0;
@@ -274,7 +275,7 @@ TEST(EditPick, PicksTheNearestNodeAndSurface) {
   EXPECT_EQ(pick->plant, 0u);
   EXPECT_LT((pick->point - mid).norm(), 0.05f);
   ASSERT_NE(pick->particle, kNoParticle);
-  EXPECT_EQ(s->particleWorld()->plantOf(pick->particle), 0u);
+  EXPECT_EQ(test::particleWorld(*s)->plantOf(pick->particle), 0u);
   EXPECT_FALSE(pickNode(*s, eye, Vec3(0, 1, 0)));
   auto hit = pickSurface(*s, Vec3(1, 1, 1), Vec3(0, -1, 0));
   ASSERT_TRUE(hit);

@@ -4,7 +4,7 @@
 #include "tendril/env/wind_field.h"
 #include "tendril/graph/build_plant.h"
 #include "tendril/graph/graph.h"
-#include "tendril/io/gltf_animation.h"
+#include "tendril/wind/gltf_animation.h"
 #include "tendril/wind/motion.h"
 
 #include "support/gltf_validator.h"
@@ -143,7 +143,7 @@ TEST(WindField, GustSamplerGivesTheAmbientWindBitForBit) {
 
 TEST(WindMotion, BranchesSwayTowardTheWindAndBack) {
   plant::PlantModel rest = leafyTree();
-  GrowthFlowSpecies species;
+  plant::GrowthFlowSpecies species;
   species.youngModulus = 2e6f;  // soft enough to reach the sway limit in this wind
   WindMotion motion(rest, species);
   env::WindField wind = constantWind(Vec3(10, 0, 0));
@@ -171,13 +171,13 @@ TEST(WindMotion, BranchesSwayTowardTheWindAndBack) {
 TEST(WindMotion, StillAirAndSupportedNodesDoNotMove) {
   plant::PlantModel rest = leafyTree();
   for (uint32_t& f : rest.flags) f |= plant::kNodeClimbing;  // all held by a wall
-  WindMotion held(rest, GrowthFlowSpecies{});
+  WindMotion held(rest, plant::GrowthFlowSpecies{});
   plant::PlantModel posed;
   held.step(1.0f, 0.04f, constantWind(Vec3(15, 0, 0)), posed);
   for (size_t i = 0; i < rest.nodeCount(); ++i) EXPECT_EQ(posed.position[i], rest.position[i]);
 
   plant::PlantModel free = leafyTree();
-  WindMotion still(free, GrowthFlowSpecies{});
+  WindMotion still(free, plant::GrowthFlowSpecies{});
   still.step(1.0f, 0.04f, env::WindField{}, posed);
   for (size_t i = 0; i < free.nodeCount(); ++i) EXPECT_EQ(posed.position[i], free.position[i]);
   for (size_t j = 0; j < free.leafCount(); ++j) EXPECT_EQ(posed.leafMotion[j], Vec3::Zero());
@@ -185,14 +185,14 @@ TEST(WindMotion, StillAirAndSupportedNodesDoNotMove) {
 
 TEST(WindMotion, LeafAnglesStayInTheirLimitsAndLeavesTearOffInAStorm) {
   plant::PlantModel rest = leafyTree();
-  GrowthFlowSpecies s;  // petiole holds up to c_p t_p = 20 m/s
+  plant::GrowthFlowSpecies s;  // petiole holds up to c_p t_p = 20 m/s
   WindMotion motion(rest, s);
   plant::PlantModel posed;
   env::WindField breeze = constantWind(Vec3(12, 0, 0));
   for (int f = 0; f < 2000; ++f) {
     motion.step(0.04f * float(f), 0.04f, breeze, posed);
     ASSERT_EQ(posed.leafCount(), rest.leafCount());
-    for (const LeafMotionState& L : motion.leaves()) {
+    for (const plant::LeafMotionState& L : motion.leaves()) {
       ASSERT_LE(std::fabs(L.petioleBend), radians(5.0f) + 1e-6f);
       ASSERT_LE(std::fabs(L.bladeBend), radians(10.0f) + 1e-6f);
       ASSERT_LE(std::fabs(L.twist), radians(15.0f) + 1e-6f);
@@ -200,7 +200,7 @@ TEST(WindMotion, LeafAnglesStayInTheirLimitsAndLeavesTearOffInAStorm) {
     }
   }
   size_t moving = 0;
-  for (const LeafMotionState& L : motion.leaves()) moving += (L.twist != 0.0f || L.vibrate != 0.0f);
+  for (const plant::LeafMotionState& L : motion.leaves()) moving += (L.twist != 0.0f || L.vibrate != 0.0f);
   EXPECT_EQ(moving, rest.leafCount());
   motion.step(100.0f, 0.04f, constantWind(Vec3(25, 0, 0)), posed);
   EXPECT_EQ(posed.leafCount(), 0u);  // 25 m/s > 20 m/s: every leaf has detached
@@ -217,7 +217,7 @@ std::array<uint64_t, 2> posedHashesOnOneAndTwoThreads(WindOf&& wind) {
   std::array<uint64_t, 2> hashes{};
   for (int threads : {1, 2}) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-    WindMotion motion(rest, GrowthFlowSpecies{});
+    WindMotion motion(rest, plant::GrowthFlowSpecies{});
     plant::PlantModel posed;
     for (int f = 0; f < 30; ++f) motion.step(0.04f * float(f), 0.04f, env::WindField(wind(f)), posed);
     hashes[size_t(threads - 1)] = plant::contentHash(posed);
@@ -262,7 +262,7 @@ TEST(WindMotion, DragFourNodesAtATimeIsDragOneAtATime) {
       std::array<uint64_t, 2> hashes{};
       for (bool lanes : {true, false}) {
         detail::setDragLanes(lanes);
-        WindMotion motion(rest, GrowthFlowSpecies{});
+        WindMotion motion(rest, plant::GrowthFlowSpecies{});
         plant::PlantModel posed;
         for (int f = 0; f < 20; ++f) motion.step(0.3f * float(f), 0.04f, env::WindField(s), posed);
         hashes[lanes ? 0 : 1] = plant::contentHash(posed);
@@ -277,7 +277,7 @@ TEST(WindMotion, SteadyWindIsReusedOnlyWhileItLasts) {
   // that adds nothing are no longer uniform and are computed afresh every frame: both must pose
   // the plant identically, also when the wind turns, gusts and steadies again.
   plant::PlantModel rest = leafyTree();
-  GrowthFlowSpecies soft;
+  plant::GrowthFlowSpecies soft;
   soft.youngModulus = 2e6f;
   env::WindEmitter far;
   far.position = Vec3(1e4f, 0, 0);
@@ -325,7 +325,7 @@ TEST(WindMotion, GraphTreesSwayDownwindAsRigidBranches) {
     std::array<uint64_t, 2> hashes{};
     for (int threads : {1, 2}) {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-      WindMotion motion(rest, GrowthFlowSpecies{});
+      WindMotion motion(rest, plant::GrowthFlowSpecies{});
       plant::PlantModel posed;
       double downwind = 0, largest = 0;
       for (int f = 0; f < 60; ++f) {
@@ -344,7 +344,7 @@ TEST(WindMotion, GraphTreesSwayDownwindAsRigidBranches) {
           downwind += moved.x();
           largest = std::max(largest, double(moved.norm()));
         }
-        for (const LeafMotionState& L : motion.leaves()) {
+        for (const plant::LeafMotionState& L : motion.leaves()) {
           ASSERT_LE(std::fabs(L.petioleBend), radians(5.0f) + 1e-6f);
           ASSERT_LE(std::fabs(L.twist), radians(15.0f) + 1e-6f);
         }
@@ -358,11 +358,11 @@ TEST(WindMotion, GraphTreesSwayDownwindAsRigidBranches) {
     EXPECT_EQ(hashes[0], hashes[1]);
 
     std::filesystem::path file = meshtest::exportTestDir() / (std::string(name) + "-wind.glb");
-    io::WindAnimationOptions o;
+    wind::WindAnimationOptions o;
     o.seconds = 1.0f;
     o.fps = 12;
     o.maxJoints = 64;
-    io::writeWindAnimationGlb({{&rest, GrowthFlowSpecies{}}}, wind, o, file);
+    wind::writeWindAnimationGlb({{&rest, plant::GrowthFlowSpecies{}}}, wind, o, file);
     meshtest::GltfValidation v = meshtest::validateGltf(file);
     EXPECT_EQ(v.exitCode, 0) << v.output;
     EXPECT_EQ(v.errors, 0) << v.output;
@@ -372,7 +372,7 @@ TEST(WindMotion, GraphTreesSwayDownwindAsRigidBranches) {
 TEST(WindAnimation, JointsAreBoundedAndCoverTheRoots) {
   plant::PlantModel p = meshtest::syntheticIvy(5000, 2);
   for (int maxJoints : {8, 32, 128}) {
-    std::vector<int32_t> joints = io::chooseJoints(p, maxJoints);
+    std::vector<int32_t> joints = wind::chooseJoints(p, maxJoints);
     EXPECT_LE(joints.size(), size_t(maxJoints));
     EXPECT_EQ(joints.front(), 0);
     EXPECT_TRUE(std::is_sorted(joints.begin(), joints.end()));
@@ -384,18 +384,18 @@ TEST(WindAnimation, LoopingClipPassesTheValidatorAndRepeats) {
   plant::PlantModel ivy = meshtest::syntheticIvy(1500, 5);
   for (uint32_t& f : ivy.flags) f &= ~uint32_t(plant::kNodeClimbing);
   ivy.name = "ivy";
-  GrowthFlowSpecies soft;
+  plant::GrowthFlowSpecies soft;
   soft.youngModulus = 2e6f;
   env::WindSettings g;
   g.mode = env::WindMode::Gusty;
   g.velocity = Vec3(8, 0, 0);
   std::filesystem::path file = meshtest::exportTestDir() / "wind.glb";
-  io::WindAnimationOptions o;
+  wind::WindAnimationOptions o;
   o.seconds = 2.0f;
   o.fps = 12;
   o.maxJoints = 24;
-  io::WindAnimationStats stats =
-      io::writeWindAnimationGlb({{&tree, soft}, {&ivy, soft}}, env::WindField(g), o, file);
+  wind::WindAnimationStats stats =
+      wind::writeWindAnimationGlb({{&tree, soft}, {&ivy, soft}}, env::WindField(g), o, file);
   EXPECT_EQ(stats.keyframes, 25u);
   EXPECT_LE(stats.joints, 48u);
   EXPECT_GT(stats.bytes, 1000u);
@@ -421,16 +421,16 @@ TEST(WindAnimation, LoopingClipPassesTheValidatorAndRepeats) {
 TEST(WindAnimation, FrameSequenceCarriesTheLeavesOwnMotion) {
   plant::PlantModel tree = leafyTree();
   ASSERT_GT(tree.leafCount(), 0u);
-  GrowthFlowSpecies soft;
+  plant::GrowthFlowSpecies soft;
   soft.youngModulus = 2e6f;
   env::WindSettings g;
   g.velocity = Vec3(8, 0, 0);
-  io::WindAnimationOptions o;
+  wind::WindAnimationOptions o;
   o.seconds = 0.5f;
   o.fps = 8;
   const std::filesystem::path dir = meshtest::exportTestDir() / "wind-frames";
   std::filesystem::create_directories(dir);
-  std::vector<std::filesystem::path> files = io::writeWindFrames({{&tree, soft}}, env::WindField(g), o, dir, "tree");
+  std::vector<std::filesystem::path> files = wind::writeWindFrames({{&tree, soft}}, env::WindField(g), o, dir, "tree");
   ASSERT_EQ(files.size(), 4u);
   EXPECT_EQ(files[0].filename(), "tree_0000.glb");
   EXPECT_EQ(files[3].filename(), "tree_0003.glb");
@@ -455,17 +455,17 @@ TEST(WindAnimation, FrameSequenceCarriesTheLeavesOwnMotion) {
     return std::string(std::istreambuf_iterator<char>(in), {});
   };
   EXPECT_NE(bytes(files[0]), bytes(files[3])) << "the frames pose the plant differently";
-  io::WindAnimationOptions zeroLength;
+  wind::WindAnimationOptions zeroLength;
   zeroLength.seconds = 0.0f;
-  EXPECT_THROW(io::writeWindFrames({{&tree, soft}}, env::WindField(g), zeroLength, dir, "x"), Error);
+  EXPECT_THROW(wind::writeWindFrames({{&tree, soft}}, env::WindField(g), zeroLength, dir, "x"), Error);
 }
 
 TEST(WindAnimation, BadOptionsAreAnError) {
   plant::PlantModel tree = leafyTree();
-  io::WindAnimationOptions o;
+  wind::WindAnimationOptions o;
   o.seconds = 0.0f;
-  std::vector<io::AnimatedPlant> plants{{&tree, GrowthFlowSpecies{}}};
-  auto write = [&] { io::writeWindAnimationGlb(plants, env::WindField{}, o, meshtest::exportTestDir() / "x.glb"); };
+  std::vector<wind::AnimatedPlant> plants{{&tree, plant::GrowthFlowSpecies{}}};
+  auto write = [&] { wind::writeWindAnimationGlb(plants, env::WindField{}, o, meshtest::exportTestDir() / "x.glb"); };
   EXPECT_THROW(write(), tendril::Error);
   o.seconds = 1.0f;
   o.fps = 0;

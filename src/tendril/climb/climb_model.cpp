@@ -32,7 +32,7 @@ class ClimbPlantSystem final : public models::PlantSystem {
  public:
   explicit ClimbPlantSystem(const models::SystemContext& c) : system_(c.sceneSeed, c.stepTime) {}
 
-  void addPlant(const scene::PlantSpec& spec, const env::Environment& env) override {
+  void addPlant(const models::PlantSpec& spec, const env::Environment& env) override {
     const auto* params = spec.paramsAs<ClimbParams>();
     ClimbPlantDef def;
     def.name = spec.name;
@@ -48,17 +48,17 @@ class ClimbPlantSystem final : public models::PlantSystem {
   size_t plantCount() const override { return system_.plantCount(); }
   plant::PlantModel snapshot(size_t plant) const override { return system_.snapshot(uint32_t(plant)); }
   size_t segmentCount() const override { return system_.stats().segments; }
-  wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return growthFlow_[plant]; }
+  plant::GrowthFlowSpecies growthFlow(size_t plant) const override { return growthFlow_[plant]; }
   void saveState(ArchiveWriter& out) const override { system_.saveState(out); }
   void loadState(ArchiveReader& in) override { system_.loadState(in); }
   void cut(size_t plant, uint32_t node) override { system_.cut(uint32_t(plant), node); }
 
  private:
   ClimbSystem system_;
-  std::vector<wind::GrowthFlowSpecies> growthFlow_;
+  std::vector<plant::GrowthFlowSpecies> growthFlow_;
 };
 
-std::shared_ptr<const scene::ModelParams> readClimbPlant(JsonObject& o, const std::filesystem::path& baseDir) {
+std::shared_ptr<const models::ModelParams> readClimbPlant(JsonObject& o, const std::filesystem::path& baseDir) {
   auto params = std::make_shared<ClimbParams>();
   const Json* sp = o.find("species");
   if (!sp) {

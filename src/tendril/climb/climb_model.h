@@ -6,7 +6,7 @@
 
 namespace tendril::climb {
 
-struct ClimbParams : scene::ModelParams {
+struct ClimbParams : models::ModelParams {
   ClimbSpecies species;
 };
 

@@ -152,6 +152,90 @@ uint32_t ClimbSystem::addPlant(const ClimbPlantDef& def, const env::Environment&
   return plants_.back()->id;
 }
 
+// Seed 003's PlaceLeaf rule at the end of the tip's new segment (out.node): two blades parted
+// by the species' spread, lying parallel to the nearest surface (upper side away from it) or
+// turned to the light in free air, each shrunk or dropped until its outline touches nothing.
+void ClimbSystem::placeLeaves(const ClimbSpecies& s, const Tip& t, const Vec3& dir,
+                              const std::optional<env::SurfacePoint>& endSupport, Rng lr,
+                              const env::Environment& env, Outcome& out) const {
+  plant::PlantModel::NodeDef& node = out.node;
+  const Vec3 end = out.end;
+  const Mat3 frame = node.orientation.toRotationMatrix();
+  // Attachment: the segment end, lifted over the stem's surface along the frame normal.
+  const Vec3 attachLocal(0.0f, node.length, node.radius + s.leafLift);
+  const Vec3 attach = node.position + node.orientation * attachLocal;
+  if (env.rayCast(end, frame.col(2), node.radius + s.leafLift)) return;
+  // Blades lie parallel to the surface nearest to them, upper side away from it (seed
+  // 003 §3.10); in free air they turn toward the light (seed 000 §4.3).
+  Vec3 leafUp = frame.col(2);
+  if (auto near = env.closestPoint(attach, s.adhesionDistance, endSupport ? &*endSupport : nullptr)) {
+    leafUp = near->away;
+  } else if (s.light > 0.0f) {
+    Vec3 toLight = env.light(attach).nominal;
+    if (toLight.squaredNorm() > 0.0f) leafUp = toLight;
+  }
+  // The blade's base direction: the growth direction laid into the blade's plane.
+  const Quat worldFromBlade = frameFromYZ(dir - leafUp * leafUp.dot(dir), leafUp);
+  const Quat nodeFromBlade = node.orientation.conjugate() * worldFromBlade;
+  struct Blade {
+    Quat nodeFromLeaf;
+    Mat3 frame;
+    uint16_t shape;
+    float aspect;
+  } blades[2];
+  for (int side = 0; side < 2; ++side) {
+    float angle = (side == 0 ? 1.0f : -1.0f) * (s.leafSpread + s.leafJitter * lr.uniform(-1.0f, 1.0f));
+    Blade& b = blades[side];
+    b.nodeFromLeaf = (nodeFromBlade * axisAngle(Vec3::UnitZ(), angle)).normalized();
+    b.shape = static_cast<uint16_t>(lr.below(uint32_t(s.leafShapes.size())));
+    b.aspect = s.leafShapes[b.shape].aspect;
+    b.frame = (node.orientation * b.nodeFromLeaf).toRotationMatrix();
+  }
+  // The blade must not pass through a surface. One closed path of segments per blade,
+  // attachment -> c0 -> c1 -> c2 -> c3 -> c0, touching nothing: then every corner is
+  // reached from the attachment without crossing a surface (none lies behind one) and
+  // all four blade edges are clear. Blades that do not fit shrink, or are dropped.
+  auto path = [&](const Blade& b, float scale, Vec3* from, Vec3* to) {
+    float size = t.leafSize * scale, petiole = s.leafPetiole * scale, hw = 0.5f * size * b.aspect;
+    const Vec3 c[4] = {attach + b.frame * Vec3(-hw, petiole, 0), attach + b.frame * Vec3(hw, petiole, 0),
+                       attach + b.frame * Vec3(hw, petiole + size, 0),
+                       attach + b.frame * Vec3(-hw, petiole + size, 0)};
+    from[0] = attach;
+    to[0] = c[0];
+    for (int k = 0; k < 4; ++k) {
+      from[k + 1] = c[k];
+      to[k + 1] = c[(k + 1) % 4];
+    }
+  };
+  float fitted[2] = {0.0f, 0.0f};
+  Vec3 from[10], to[10];
+  path(blades[0], 1.0f, from, to);
+  path(blades[1], 1.0f, from + 5, to + 5);
+  if (!env.anySegmentBlocked(from, to, 10)) {
+    fitted[0] = fitted[1] = 1.0f;  // the common case: both blades fit as they are
+  } else {
+    for (int side = 0; side < 2; ++side)
+      for (float scale : {1.0f, 0.7f, 0.45f}) {
+        path(blades[side], scale, from, to);
+        if (!env.anySegmentBlocked(from, to, 5)) {
+          fitted[side] = scale;
+          break;
+        }
+      }
+  }
+  for (int side = 0; side < 2; ++side) {
+    if (fitted[side] == 0.0f) continue;
+    plant::PlantModel::LeafDef& leaf = out.leaves[out.leafCount++];
+    leaf.offset = attachLocal;
+    leaf.rotation = blades[side].nodeFromLeaf;
+    leaf.size = t.leafSize * fitted[side];
+    leaf.petiole = s.leafPetiole * fitted[side];
+    leaf.thickness = t.leafThickness;
+    leaf.shape = blades[side].shape;
+  }
+  if (out.leafCount > 0) node.flags |= plant::kNodeLeafNode;
+}
+
 void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environment& env, Outcome& out) const {
   const ClimbSpecies& s = plant.def.species;
   const uint64_t seed = plant.def.seed ^ mix64(sceneSeed_);
@@ -180,16 +264,16 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   // segments grow shorter (eq. 8) and thicker (eq. 7), its leaves smaller (eq. 17) and thicker
   // (eq. 16), one unit of growth time per segment, and it grows along its still-air direction
   // turned downwind by eq. 9's growth angle α_t. Calm wind leaves every value untouched.
-  wind::GrowthFlowStep flow;
+  plant::GrowthFlowStep flow;
   Vec3 windHere = Vec3::Zero();
   if (!env.windField().settings().calm()) {
     windHere = env.wind(t.position, float(step_) * stepTime_);
-    flow = wind::growthStep(windHere.norm(), s.growthFlow);
+    flow = plant::growthStep(windHere.norm(), s.growthFlow);
   }
   Quat windTurn = Quat::Identity();  // still-air direction -> the direction grown in the wind
   if (flow.active()) {
-    t.windAngle = wind::nextGrowthAngle(t.windAngle < 0.0f ? s.growthFlow.angle0 : t.windAngle, flow);
-    const Vec3 bent = wind::windGrowthDirection(t.dir, windHere, t.windAngle);
+    t.windAngle = plant::nextGrowthAngle(t.windAngle < 0.0f ? s.growthFlow.angle0 : t.windAngle, flow);
+    const Vec3 bent = plant::windGrowthDirection(t.dir, windHere, t.windAngle);
     windTurn = Quat::FromTwoVectors(t.dir, bent);
     t.length *= flow.length;
     if (s.growthFlow.maxLength > 0.0f) t.length = std::min(t.length, s.growthFlow.maxLength);
@@ -302,81 +386,8 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
       case RuleKind::PlaceLeaf: {
         if (s.leafShapes.empty() || t.leafSize <= 0.0f) break;
         // Algorithm 2: a leaf in a wind beyond its petiole's or blade's strength tears off.
-        if (flow.active() && wind::leafDetaches(windHere.norm(), s.growthFlow)) break;
-        Rng lr = rng(kPurposeLeaf);
-        // Attachment: the segment end, lifted over the stem's surface along the frame normal.
-        const Vec3 attachLocal(0.0f, node.length, node.radius + s.leafLift);
-        const Vec3 attach = node.position + node.orientation * attachLocal;
-        if (env.rayCast(end, frame.col(2), node.radius + s.leafLift)) break;
-        // Blades lie parallel to the surface nearest to them, upper side away from it (seed
-        // 003 §3.10); in free air they turn toward the light (seed 000 §4.3).
-        Vec3 leafUp = frame.col(2);
-        if (auto near = env.closestPoint(attach, s.adhesionDistance, endSupport ? &*endSupport : nullptr)) {
-          leafUp = near->away;
-        } else if (s.light > 0.0f) {
-          Vec3 toLight = env.light(attach).nominal;
-          if (toLight.squaredNorm() > 0.0f) leafUp = toLight;
-        }
-        // The blade's base direction: the growth direction laid into the blade's plane.
-        const Quat worldFromBlade = frameFromYZ(dir - leafUp * leafUp.dot(dir), leafUp);
-        const Quat nodeFromBlade = node.orientation.conjugate() * worldFromBlade;
-        struct Blade {
-          Quat nodeFromLeaf;
-          Mat3 frame;
-          uint16_t shape;
-          float aspect;
-        } blades[2];
-        for (int side = 0; side < 2; ++side) {
-          float angle = (side == 0 ? 1.0f : -1.0f) * (s.leafSpread + s.leafJitter * lr.uniform(-1.0f, 1.0f));
-          Blade& b = blades[side];
-          b.nodeFromLeaf = (nodeFromBlade * axisAngle(Vec3::UnitZ(), angle)).normalized();
-          b.shape = static_cast<uint16_t>(lr.below(uint32_t(s.leafShapes.size())));
-          b.aspect = s.leafShapes[b.shape].aspect;
-          b.frame = (node.orientation * b.nodeFromLeaf).toRotationMatrix();
-        }
-        // The blade must not pass through a surface. One closed path of segments per blade,
-        // attachment -> c0 -> c1 -> c2 -> c3 -> c0, touching nothing: then every corner is
-        // reached from the attachment without crossing a surface (none lies behind one) and
-        // all four blade edges are clear. Blades that do not fit shrink, or are dropped.
-        auto path = [&](const Blade& b, float scale, Vec3* from, Vec3* to) {
-          float size = t.leafSize * scale, petiole = s.leafPetiole * scale, hw = 0.5f * size * b.aspect;
-          const Vec3 c[4] = {attach + b.frame * Vec3(-hw, petiole, 0), attach + b.frame * Vec3(hw, petiole, 0),
-                             attach + b.frame * Vec3(hw, petiole + size, 0),
-                             attach + b.frame * Vec3(-hw, petiole + size, 0)};
-          from[0] = attach;
-          to[0] = c[0];
-          for (int k = 0; k < 4; ++k) {
-            from[k + 1] = c[k];
-            to[k + 1] = c[(k + 1) % 4];
-          }
-        };
-        float fitted[2] = {0.0f, 0.0f};
-        Vec3 from[10], to[10];
-        path(blades[0], 1.0f, from, to);
-        path(blades[1], 1.0f, from + 5, to + 5);
-        if (!env.anySegmentBlocked(from, to, 10)) {
-          fitted[0] = fitted[1] = 1.0f;  // the common case: both blades fit as they are
-        } else {
-          for (int side = 0; side < 2; ++side)
-            for (float scale : {1.0f, 0.7f, 0.45f}) {
-              path(blades[side], scale, from, to);
-              if (!env.anySegmentBlocked(from, to, 5)) {
-                fitted[side] = scale;
-                break;
-              }
-            }
-        }
-        for (int side = 0; side < 2; ++side) {
-          if (fitted[side] == 0.0f) continue;
-          plant::PlantModel::LeafDef& leaf = out.leaves[out.leafCount++];
-          leaf.offset = attachLocal;
-          leaf.rotation = blades[side].nodeFromLeaf;
-          leaf.size = t.leafSize * fitted[side];
-          leaf.petiole = s.leafPetiole * fitted[side];
-          leaf.thickness = t.leafThickness;
-          leaf.shape = blades[side].shape;
-        }
-        if (out.leafCount > 0) node.flags |= plant::kNodeLeafNode;
+        if (flow.active() && plant::leafDetaches(windHere.norm(), s.growthFlow)) break;
+        placeLeaves(s, t, dir, endSupport, rng(kPurposeLeaf), env, out);
         break;
       }
       case RuleKind::Branch: {

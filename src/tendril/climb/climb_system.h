@@ -12,11 +12,13 @@
 #include "tendril/climb/occupancy.h"
 #include "tendril/climb/species.h"
 #include "tendril/core/archive.h"
+#include "tendril/core/random.h"
 #include "tendril/env/environment.h"
 #include "tendril/plant/plant_model.h"
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -109,6 +111,10 @@ class ClimbSystem {
   };
 
   void growTip(const Plant& plant, const Tip& tip, const env::Environment& env, Outcome& out) const;
+  // The PlaceLeaf rule on the segment growTip has just added (out.node, ending at out.end).
+  void placeLeaves(const ClimbSpecies& s, const Tip& t, const Vec3& dir,
+                   const std::optional<env::SurfacePoint>& endSupport, Rng lr, const env::Environment& env,
+                   Outcome& out) const;
   // Applies the plant's outcomes, which start at outcomes_[first]: new nodes, leaves and tips.
   void mergePlant(Plant& plant, size_t first);
   void rebuildOccupancy();

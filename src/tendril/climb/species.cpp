@@ -80,7 +80,7 @@ void readClimbSpecies(JsonObject& o, ClimbSpecies& s, const std::string& baseDir
     l->finish();
   }
   if (auto b = o.optionalObject("bark")) plant::readBark(*b, s.bark, baseDir);
-  if (auto g = o.optionalObject("growth_flow")) wind::readGrowthFlow(*g, s.growthFlow);
+  if (auto g = o.optionalObject("growth_flow")) plant::readGrowthFlow(*g, s.growthFlow);
 
   if (const Json* rules = o.find("rules")) {
     if (!rules->is_array()) throw o.error("rules", "expected an array of rules, got " + describeJson(*rules));

@@ -5,7 +5,7 @@
 
 #include "tendril/core/math.h"
 #include "tendril/plant/plant_model.h"
-#include "tendril/wind/growth_flow.h"
+#include "tendril/plant/growth_flow.h"
 
 #include <string>
 #include <vector>
@@ -100,7 +100,7 @@ struct ClimbSpecies {
   // How growth answers the wind (seed 001, Growth-Flow): per segment the tip's length, radius,
   // leaf size and leaf thickness take eq. 7/8/16/17's factors, the tip turns downwind by eq. 9,
   // and no leaf is placed where the wind would tear it off. See docs/wind.md.
-  wind::GrowthFlowSpecies growthFlow;
+  plant::GrowthFlowSpecies growthFlow;
 };
 
 // Reads the species fields present in `o` over `s` (absent fields keep their value), so a

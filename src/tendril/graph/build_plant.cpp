@@ -202,18 +202,11 @@ struct PrimitiveJob {
   std::string texture;
 };
 
-}  // namespace
-
-PlantModel buildPlant(const ITree& t) {
-  const Graph& g = *t.graph;
-  PlantModel plant;
-  plant.name = g.name;
-  plant.species = "graph";
-  plant.bark = g.bark;
-  Deformation def(t);
+// The skeleton's nodes (deformed where the graph has deformers) and, where leaves hang from no
+// stem, a zero-length root node at the root component's frame (it sweeps to no bark); returns
+// that node, or -1.
+int32_t addSkeleton(const ITree& t, Deformation& def, PlantModel& plant, const Pose& rootPose) {
   const bool deforming = !t.deformers.empty();
-
-  // --- skeleton ---
   std::vector<NodeState> nodes(t.nodes.size());
   for (size_t i = 0; i < t.nodes.size(); ++i) nodes[i] = {t.nodes[i].position, t.nodes[i].orientation, t.nodes[i].length};
   if (deforming) deformSkeleton(t, def, nodes);
@@ -241,7 +234,6 @@ PlantModel buildPlant(const ITree& t) {
   // Leaves need a node: those hanging from no stem get a zero-length root node (it sweeps to
   // no bark) at the root component's frame.
   int32_t rootNode = -1;
-  Pose rootPose{t.instances[0].frame.position, t.instances[0].frame.rotation};
   if (needRoot) {
     PlantModel::NodeDef d;
     d.position = rootPose.p;
@@ -250,8 +242,16 @@ PlantModel buildPlant(const ITree& t) {
     d.radius = 1e-4f;
     rootNode = plant.addNode(d);
   }
+  return rootNode;
+}
 
-  // --- leaves as cards ---
+// Leaves drawn as cards: one leaf shape per (texture, aspect, colour), each card placed on its
+// node, following the deformed segment where deformers reshape it.
+void addLeafCards(const ITree& t, Deformation& def, int32_t rootNode, const Pose& rootPose, PlantModel& plant) {
+  const Graph& g = *t.graph;
+  const bool deforming = !t.deformers.empty();
+  size_t cards = 0;
+  for (const LeafItem& l : t.leaves) cards += l.mesh ? 0 : 1;
   std::vector<int32_t> cardItems;
   cardItems.reserve(cards);
   std::vector<uint16_t> shapeOf;
@@ -338,11 +338,21 @@ PlantModel buildPlant(const ITree& t) {
     }
     for (size_t k = 0; k < n; ++k) plant.flags[size_t(plant.leafNode[base + k])] |= plant::kNodeLeafNode;
   }
+}
 
-  // --- primitives ---
+// Every primitive of the plant as a job: solids, surfaces of revolution and leaf blades share
+// meshes cooked once per recipe; horns and point-set strips are meshes of their own.
+struct PrimitivePlan {
   std::vector<Recipe> recipes;
-  std::map<std::string, int32_t> recipeIds;
   std::vector<PrimitiveJob> jobs;
+};
+
+PrimitivePlan planPrimitives(const ITree& t) {
+  const Graph& g = *t.graph;
+  PrimitivePlan plan;
+  std::vector<Recipe>& recipes = plan.recipes;
+  std::vector<PrimitiveJob>& jobs = plan.jobs;
+  std::map<std::string, int32_t> recipeIds;
   auto componentName = [&](int32_t instance) {
     int32_t c = t.instances[size_t(instance)].component;
     return c < 0 ? std::string("root") : g.components[size_t(c)].name;
@@ -445,7 +455,14 @@ PlantModel buildPlant(const ITree& t) {
       if (!job.world.empty()) jobs.push_back(std::move(job));
     }
   }
+  return plan;
+}
 
+// The jobs' meshes: shared ones once, placed by a matrix on their anchor; reshaped ones
+// deformed in the world and brought into the anchor's frame.
+void addPrimitives(const ITree& t, Deformation& def, PrimitivePlan& plan, PlantModel& plant) {
+  std::vector<Recipe>& recipes = plan.recipes;
+  std::vector<PrimitiveJob>& jobs = plan.jobs;
   // Shared meshes, cooked in parallel.
   std::vector<TriangleMesh> cooked(recipes.size());
   parallelFor(0, recipes.size(), [&](size_t i) { cooked[i] = cook(recipes[i], t); }, 1);
@@ -494,7 +511,22 @@ PlantModel buildPlant(const ITree& t) {
     plant.meshes.push_back(std::move(pm));
     plant.primitives.push_back({anchor, uint32_t(plant.meshes.size() - 1), Mat4::Identity()});
   }
+}
 
+}  // namespace
+
+PlantModel buildPlant(const ITree& t) {
+  const Graph& g = *t.graph;
+  PlantModel plant;
+  plant.name = g.name;
+  plant.species = "graph";
+  plant.bark = g.bark;
+  Deformation def(t);
+  const Pose rootPose{t.instances[0].frame.position, t.instances[0].frame.rotation};
+  const int32_t rootNode = addSkeleton(t, def, plant, rootPose);
+  addLeafCards(t, def, rootNode, rootPose, plant);
+  PrimitivePlan primitives = planPrimitives(t);
+  addPrimitives(t, def, primitives, plant);
   plant::validate(plant, g.source);
   return plant;
 }

@@ -2,7 +2,7 @@
 
 #include "tendril/core/error.h"
 #include "tendril/core/random.h"
-#include "tendril/mesh/curve.h"
+#include "tendril/core/curve.h"
 
 #include <fmt/format.h>
 
@@ -664,7 +664,7 @@ class Expander {
       for (size_t k = 0; k + 1 < pts.size(); ++k) {
         Vec3 p0 = k > 0 ? pts[k - 1] : Vec3(2.0f * pts[k] - pts[k + 1]);
         Vec3 p3 = k + 2 < pts.size() ? pts[k + 2] : Vec3(2.0f * pts[k + 1] - pts[k]);
-        mesh::CurveSegment seg = mesh::centripetalCatmullRom(p0, pts[k], pts[k + 1], p3);
+        CurveSegment seg = centripetalCatmullRom(p0, pts[k], pts[k + 1], p3);
         for (int j = 0; j < kSamples; ++j) dense.push_back(seg.point(float(j) / kSamples));
       }
       dense.push_back(pts.back());

@@ -13,7 +13,7 @@ namespace {
 
 class GraphPlantSystem final : public models::PlantSystem {
  public:
-  void addPlant(const scene::PlantSpec& spec, const env::Environment&) override {
+  void addPlant(const models::PlantSpec& spec, const env::Environment&) override {
     const auto* params = spec.paramsAs<GraphPlantParams>();
     if (!params || !params->model) throw Error("", "/graph", "a graph plant needs a \"graph\" file");
     plant::PlantModel model = *params->model;
@@ -21,7 +21,7 @@ class GraphPlantSystem final : public models::PlantSystem {
     plants_.push_back(std::move(model));
   }
   // A new graph (the studio's p-graph editor): the plant is generated again at once.
-  void regrow(size_t plant, const scene::PlantSpec& spec, const env::Environment&) override {
+  void regrow(size_t plant, const models::PlantSpec& spec, const env::Environment&) override {
     const auto* params = spec.paramsAs<GraphPlantParams>();
     if (!params || !params->model) throw Error("", "/graph", "a graph plant needs a \"graph\" file");
     plant::PlantModel model = *params->model;
@@ -52,7 +52,7 @@ class GraphPlantSystem final : public models::PlantSystem {
   std::vector<plant::PlantModel> plants_;
 };
 
-std::shared_ptr<const scene::ModelParams> readGraphPlant(JsonObject& o, const std::filesystem::path& baseDir) {
+std::shared_ptr<const models::ModelParams> readGraphPlant(JsonObject& o, const std::filesystem::path& baseDir) {
   auto params = std::make_shared<GraphPlantParams>();
   // "graph_document": the graph itself (an edited graph, e.g. from the studio); "graph" then
   // only names it and places its relative files.

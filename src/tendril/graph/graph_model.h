@@ -15,7 +15,7 @@
 
 namespace tendril::graph {
 
-struct GraphPlantParams : scene::ModelParams {
+struct GraphPlantParams : models::ModelParams {
   std::shared_ptr<const Graph> graph;
   std::shared_ptr<const plant::PlantModel> model;
 };

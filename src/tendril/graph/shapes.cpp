@@ -1,7 +1,7 @@
 #include "tendril/graph/shapes.h"
 
 #include "tendril/io/texture.h"
-#include "tendril/mesh/curve.h"
+#include "tendril/core/curve.h"
 
 #include <algorithm>
 #include <cmath>
@@ -171,7 +171,7 @@ std::vector<Vec2> sampleCurve(const std::vector<Vec2>& points, bool spline, int 
     Vec3 p0 = k > 0 ? lift(points[k - 1]) : Vec3(2.0f * p1 - p2);
     Vec3 p3 = k + 2 < points.size() ? lift(points[k + 2]) : Vec3(2.0f * p2 - p1);
     if ((p2 - p1).norm() < 1e-9f) continue;
-    mesh::CurveSegment seg = mesh::centripetalCatmullRom(p0, p1, p2, p3);
+    CurveSegment seg = centripetalCatmullRom(p0, p1, p2, p3);
     for (int j = 0; j < samples; ++j) {
       Vec3 q = j == 0 ? p1 : seg.point(float(j) / float(samples));
       out.push_back(Vec2(q.x(), q.y()));

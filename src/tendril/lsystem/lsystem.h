@@ -39,7 +39,7 @@ struct RunOptions {
   float stepTime = 1.0f;                // seconds of node age per derivation step
   // Growth-Flow constants (seed 001): each derivation step records the wind at the plant's
   // start position as one unit of growth time, and interpretation applies it (InterpretOptions).
-  wind::GrowthFlowSpecies growthFlow;
+  plant::GrowthFlowSpecies growthFlow;
 };
 
 class LSystem {
@@ -78,7 +78,7 @@ class LSystem {
   // The plant the current string draws.
   plant::PlantModel interpret() const;
   // The wind recorded so far (one unit per derivation step).
-  const wind::GrowthFlowHistory& windHistory() const { return wind_; }
+  const plant::GrowthFlowHistory& windHistory() const { return wind_; }
 
   // The derivation's state (string, globals, step; sessions and undo, lsystem_state.cpp).
   // loadState expects an LSystem made from the same grammar and options.
@@ -98,7 +98,7 @@ class LSystem {
   LString current_, next_;
   DeriveScratch scratch_;
   bool answered_ = false;
-  wind::GrowthFlowHistory wind_;
+  plant::GrowthFlowHistory wind_;
 };
 
 }  // namespace tendril::lsystem

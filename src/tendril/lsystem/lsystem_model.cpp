@@ -15,7 +15,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
  public:
   explicit LSystemPlantSystem(const models::SystemContext& c) : context_(c) {}
 
-  void addPlant(const scene::PlantSpec& spec, const env::Environment& env) override {
+  void addPlant(const models::PlantSpec& spec, const env::Environment& env) override {
     plants_.push_back(start(spec, plants_.size(), env));
     names_.push_back(spec.name);
     growthFlow_.push_back(spec.paramsAs<LSystemParams>()->growthFlow);
@@ -24,7 +24,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
   // A new grammar (or derivation length, placement...) for a growing plant: derived afresh
   // with the plant's own random keys for as many steps as the plant had taken (fewer when the
   // new derivation is shorter), each step asking the environment as it is now.
-  void regrow(size_t plant, const scene::PlantSpec& spec, const env::Environment& env) override {
+  void regrow(size_t plant, const models::PlantSpec& spec, const env::Environment& env) override {
     const uint32_t steps = plants_.at(plant)->stepCount();
     std::unique_ptr<LSystem> ls = start(spec, plant, env);
     try {
@@ -55,7 +55,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
     return m;
   }
 
-  wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return growthFlow_.at(plant); }
+  plant::GrowthFlowSpecies growthFlow(size_t plant) const override { return growthFlow_.at(plant); }
 
   size_t segmentCount() const override {
     size_t n = 0;
@@ -74,7 +74,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
   }
 
  private:
-  std::unique_ptr<LSystem> start(const scene::PlantSpec& spec, size_t id, const env::Environment& env) const {
+  std::unique_ptr<LSystem> start(const models::PlantSpec& spec, size_t id, const env::Environment& env) const {
     const auto* params = spec.paramsAs<LSystemParams>();
     if (!params || !params->grammar) throw Error("", "/grammar", "the plant has no grammar");
     RunOptions o;
@@ -98,10 +98,10 @@ class LSystemPlantSystem final : public models::PlantSystem {
   models::SystemContext context_;
   std::vector<std::unique_ptr<LSystem>> plants_;
   std::vector<std::string> names_;
-  std::vector<wind::GrowthFlowSpecies> growthFlow_;
+  std::vector<plant::GrowthFlowSpecies> growthFlow_;
 };
 
-std::shared_ptr<const scene::ModelParams> readLSystemPlant(JsonObject& o, const std::filesystem::path& baseDir) {
+std::shared_ptr<const models::ModelParams> readLSystemPlant(JsonObject& o, const std::filesystem::path& baseDir) {
   auto params = std::make_shared<LSystemParams>();
   if (!o.has("grammar") && !o.has("grammar_text"))
     throw o.error("grammar", "is required: a built-in grammar name (e.g. \"japanese-ivy\") or a path to a .ls file");
@@ -157,7 +157,7 @@ std::shared_ptr<const scene::ModelParams> readLSystemPlant(JsonObject& o, const 
   params->grammar = std::move(grammar);
   int64_t length = o.integer("derivation_length", -1, 0, 10'000'000);
   if (length >= 0) params->derivationLength = int(length);
-  if (auto g = o.optionalObject("growth_flow")) wind::readGrowthFlow(*g, params->growthFlow);
+  if (auto g = o.optionalObject("growth_flow")) plant::readGrowthFlow(*g, params->growthFlow);
   return params;
 }
 

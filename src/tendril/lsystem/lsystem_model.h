@@ -11,10 +11,10 @@
 
 namespace tendril::lsystem {
 
-struct LSystemParams : scene::ModelParams {
+struct LSystemParams : models::ModelParams {
   std::shared_ptr<const Grammar> grammar;
   std::optional<int> derivationLength;  // "derivation_length": overrides the grammar's
-  wind::GrowthFlowSpecies growthFlow;   // "growth_flow": how it grows in the wind (seed 001)
+  plant::GrowthFlowSpecies growthFlow;   // "growth_flow": how it grows in the wind (seed 001)
 };
 
 models::ModelType lsystemModelType();

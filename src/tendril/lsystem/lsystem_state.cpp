@@ -55,7 +55,7 @@ void LSystem::loadState(ArchiveReader& in) {
     if (s.ids[i] >= grammar_->modules.size() || s.paramStart[i] > s.paramStart[i + 1])
       in.fail(fmt::format("module {} of the saved L-system string is not one of its grammar", i));
   const size_t windAt = in.position();
-  auto sums = in.vector<wind::GrowthFlowHistory::Sums>();
+  auto sums = in.vector<plant::GrowthFlowHistory::Sums>();
   auto active = in.vector<uint32_t>();
   auto torn = in.vector<uint32_t>();
   const Vec3 latest = in.value<Vec3>();

@@ -298,13 +298,13 @@ class Turtle {
       return;
     }
     orthonormalize();
-    const wind::GrowthFlowHistory::Factors flow = windFactors();
+    const plant::GrowthFlowHistory::Factors flow = windFactors();
     Vec3 stillH, stillL, stillU;
     bool turned = false;
     if (flow.active) {
       len *= flow.length;
       if (o_.growthFlow->maxLength > 0.0f) len = std::min(len, o_.growthFlow->maxLength);
-      const Vec3 bent = wind::windGrowthDirection(s.h, o_.wind->latestWind(), flow.angle);
+      const Vec3 bent = plant::windGrowthDirection(s.h, o_.wind->latestWind(), flow.angle);
       if (bent != s.h) {
         stillH = s.h, stillL = s.l, stillU = s.u;
         turned = true;
@@ -470,7 +470,7 @@ class Turtle {
   }
 
   // Growth-Flow factors of the module being drawn (see InterpretOptions::wind).
-  wind::GrowthFlowHistory::Factors windFactors() const {
+  plant::GrowthFlowHistory::Factors windFactors() const {
     if (!o_.wind || !o_.growthFlow) return {};
     return o_.wind->since(birth_, o_.step, *o_.growthFlow);
   }
@@ -478,7 +478,7 @@ class Turtle {
   void leaf(ModuleId id, const float* p, uint32_t n) {
     float size = n > 0 ? p[0] : g_.turtle.step;
     if (!(size > 0.0f)) return;  // a leaf of size 0 is not drawn
-    const wind::GrowthFlowHistory::Factors flow = windFactors();
+    const plant::GrowthFlowHistory::Factors flow = windFactors();
     if (flow.torn) return;  // torn off by a wind above its strength (Algorithm 2)
     size *= flow.leafRadius;
     int shape = n > 1 ? int(std::floor(p[1])) : 0;

@@ -15,7 +15,7 @@
 #include "tendril/lsystem/grammar.h"
 #include "tendril/lsystem/lstring.h"
 #include "tendril/plant/plant_model.h"
-#include "tendril/wind/growth_flow.h"
+#include "tendril/plant/growth_flow.h"
 
 #include <utility>
 #include <vector>
@@ -43,8 +43,8 @@ struct InterpretOptions {
   // factors (eq. 7, 8, 16, 17), it is drawn turned toward the wind by eq. 9's α_t (Algorithm 1;
   // the turtle keeps its still-air heading for what follows), and a leaf that lived through a
   // wind above its strength is gone (Algorithm 2). Null: still air.
-  const wind::GrowthFlowHistory* wind = nullptr;
-  const wind::GrowthFlowSpecies* growthFlow = nullptr;
+  const plant::GrowthFlowHistory* wind = nullptr;
+  const plant::GrowthFlowSpecies* growthFlow = nullptr;
 };
 
 // The plant the string describes. Throws Error for run-time errors in interpretation rules and

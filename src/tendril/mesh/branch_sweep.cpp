@@ -2,7 +2,7 @@
 
 #include "tendril/core/error.h"
 #include "tendril/core/parallel.h"
-#include "tendril/mesh/curve.h"
+#include "tendril/core/curve.h"
 
 #include <fmt/format.h>
 

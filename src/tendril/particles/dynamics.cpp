@@ -1,7 +1,7 @@
 // Plant dynamics of seed 000 §4.1 and its appendix: oriented-particle shape matching after
 // Müller & Chentanez 2011.
 #include "tendril/core/parallel.h"
-#include "tendril/particles/match_lanes.h"
+#include "tendril/core/match_lanes.h"
 #include "tendril/particles/shape_matching.h"
 #include "tendril/particles/world.h"
 
@@ -111,6 +111,40 @@ void ParticleWorld::shapeMatch() {
   matchNode_.resize(count);
   matchRest_.resize(count);
 
+  gatherMatchRest();
+
+  const int iterations = std::max(1, settings_.iterations);
+  const uint32_t drag = dragParticle_;
+  parallelFor(0, pieceStart_.size() - 1, [&](size_t piece) {
+    const uint32_t begin = pieceStart_[piece], end = pieceStart_[piece + 1];
+    for (int iteration = 0; iteration < iterations; ++iteration) {
+      for (uint32_t k = begin; k < end; ++k) {
+        // Four particles side by side where none of them is another's parent (their parents
+        // come before k: the piece order is breadth first) and none is held by the drag.
+        if (k + 4 <= end && matchParent_[k] < k && matchParent_[k + 1] < k && matchParent_[k + 2] < k &&
+            matchParent_[k + 3] < k && pieceOrder_[k] != drag && pieceOrder_[k + 1] != drag &&
+            pieceOrder_[k + 2] != drag && pieceOrder_[k + 3] != drag) {
+          matchFour(k);
+          k += 3;
+          continue;
+        }
+        matchOne(k);
+      }
+    }
+  }, 1);
+
+  parallelFor(0, count, [&](size_t k) {
+    const uint32_t i = pieceOrder_[k];
+    xp_[i] = matchNode_[k].x;
+    qp_[i] = matchNode_[k].q;
+    groupRotation_[i] = matchNode_[k].rotation;
+  }, 2048);
+}
+
+// What does not move within a step, per entry of the piece order: masses, rest offsets,
+// eq. 4's weights, the stiffness and the anchor pull; and the first pass's starting state.
+void ParticleWorld::gatherMatchRest() {
+  const size_t count = pieceOrder_.size();
   // A plant's root is held in place and orientation. In its groups it counts as much heavier,
   // so that it fixes their rotation as well as their position — otherwise a two-particle group
   // could turn freely about its centre and the plant would topple.
@@ -174,170 +208,150 @@ void ParticleWorld::shapeMatch() {
     node.frame = qp_[i] * qr_[i].conjugate();
     node.moment = qp_[i].toRotationMatrix() * r.restMoment;
   }, 1024);
+}
 
-  const int iterations = std::max(1, settings_.iterations);
-  const uint32_t drag = dragParticle_;
-  // The fit of the loop below for the four particles k … k + 3 (none a root, each with a
-  // parent, none dragged), one per lane (match_lanes.h): bit for bit the scalar fit of each, and
-  // the four independent chains of arithmetic run side by side (about 40 % less time here than
-  // the same work one particle after the other, bench/README.md).
-  auto fitFour = [&](uint32_t k) {
-    using namespace lanes;
-    MatchNode* n[4] = {&matchNode_[k], &matchNode_[k + 1], &matchNode_[k + 2], &matchNode_[k + 3]};
-    const MatchRest* r[4] = {&matchRest_[k], &matchRest_[k + 1], &matchRest_[k + 2], &matchRest_[k + 3]};
-    const MatchNode* p[4] = {&matchNode_[r[0]->parent], &matchNode_[r[1]->parent], &matchNode_[r[2]->parent],
-                             &matchNode_[r[3]->parent]};
-    const V3 x = pack(n[0]->x, n[1]->x, n[2]->x, n[3]->x);
-    const V3 restOffset = pack(r[0]->restOffset, r[1]->restOffset, r[2]->restOffset, r[3]->restOffset);
-    const V3 fromParent = pack(r[0]->fromParent, r[1]->fromParent, r[2]->fromParent, r[3]->fromParent);
-    // Eq. 14–15: the own moment, the parent's terms, then each child's in list order.
-    M3 A = pack(n[0]->moment, n[1]->moment, n[2]->moment, n[3]->moment);
-    const V3 px = pack(p[0]->x, p[1]->x, p[2]->x, p[3]->x);
-    const V3 d = pack(matchRest_[r[0]->parent].matchMass, matchRest_[r[1]->parent].matchMass,
-                      matchRest_[r[2]->parent].matchMass, matchRest_[r[3]->parent].matchMass) *
-                 (px - x);
-    const M4 all = {-1, -1, -1, -1};
-    addMomentTerm(A, pack(p[0]->moment, p[1]->moment, p[2]->moment, p[3]->moment), d, restOffset - fromParent, all);
-    V3 offset = V3{splat(0.0f), splat(0.0f), splat(0.0f)} + d;
-    uint32_t most = 0;
-    for (int l = 0; l < 4; ++l) most = std::max(most, r[l]->childEnd - r[l]->childBegin);
-    for (uint32_t c = 0; c < most; ++c) {
-      uint32_t ck[4];
-      M4 has;
-      for (int l = 0; l < 4; ++l) {
-        has[l] = r[l]->childBegin + c < r[l]->childEnd ? -1 : 0;
-        ck[l] = has[l] ? r[l]->childBegin + c : k;  // a lane out of children reads anything and keeps its sums
-      }
-      const MatchNode* cn[4] = {&matchNode_[ck[0]], &matchNode_[ck[1]], &matchNode_[ck[2]], &matchNode_[ck[3]]};
-      const MatchRest* cr[4] = {&matchRest_[ck[0]], &matchRest_[ck[1]], &matchRest_[ck[2]], &matchRest_[ck[3]]};
-      const V3 dc = pack(cr[0]->matchMass, cr[1]->matchMass, cr[2]->matchMass, cr[3]->matchMass) *
-                    (pack(cn[0]->x, cn[1]->x, cn[2]->x, cn[3]->x) - x);
-      addMomentTerm(A, pack(cn[0]->moment, cn[1]->moment, cn[2]->moment, cn[3]->moment), dc,
-                    pack(cr[0]->fromParent, cr[1]->fromParent, cr[2]->fromParent, cr[3]->fromParent) + restOffset, has);
-      offset = select(has, offset + dc, offset);
-    }
-    const V3 center = x + pack(r[0]->invGroupMass, r[1]->invGroupMass, r[2]->invGroupMass, r[3]->invGroupMass) * offset;
-    const Q4 own = extractRotationOnce(A, pack(n[0]->rotation, n[1]->rotation, n[2]->rotation, n[3]->rotation));
-    // Eq. 3–4 and §4.3, as in the loop below.
-    const F4 ownWeight = pack(r[0]->ownWeight, r[1]->ownWeight, r[2]->ownWeight, r[3]->ownWeight);
-    const F4 parentWeight = pack(r[0]->parentWeight, r[1]->parentWeight, r[2]->parentWeight, r[3]->parentWeight);
-    const Q4 parentFrame = pack(p[0]->frame, p[1]->frame, p[2]->frame, p[3]->frame);
-    const V3 xg =
-        ownWeight * (rotate(own, restOffset) + center) + parentWeight * (rotate(parentFrame, fromParent) + px);
-    const Q4 Rp = select(dot4(parentFrame, own) < 0.0f, negate(parentFrame), parentFrame);
-    const Q4 rotation = normalized({ownWeight * own.x + parentWeight * Rp.x, ownWeight * own.y + parentWeight * Rp.y,
-                                    ownWeight * own.z + parentWeight * Rp.z, ownWeight * own.w + parentWeight * Rp.w});
-    const F4 s = pack(r[0]->stiffness, r[1]->stiffness, r[2]->stiffness, r[3]->stiffness);
-    V3 xn = x + s * (xg - x);
-    const Q4 qr = pack(r[0]->qr, r[1]->qr, r[2]->qr, r[3]->qr);
-    const Q4 nq = pack(n[0]->q, n[1]->q, n[2]->q, n[3]->q);
-    Q4 qg = rotation * qr;
-    qg = select(dot4(qg, nq) < 0.0f, negate(qg), qg);
-    const F4 keep = 1.0f - s;
-    const Q4 q =
-        normalized({keep * nq.x + s * qg.x, keep * nq.y + s * qg.y, keep * nq.z + s * qg.z, keep * nq.w + s * qg.w});
-    xn = xn + pack(r[0]->phi, r[1]->phi, r[2]->phi, r[3]->phi) *
-                  (pack(r[0]->anchor, r[1]->anchor, r[2]->anchor, r[3]->anchor) - xn);  // eq. 5
-    const Q4 frame = q * conjugate(qr);
-    const M3 moment =
-        toRotationMatrix(q) * pack(r[0]->restMoment, r[1]->restMoment, r[2]->restMoment, r[3]->restMoment);
+// The fit of matchOne() for the four particles k … k + 3 (none a root, each with a
+// parent, none dragged), one per lane (core/match_lanes.h): bit for bit the scalar fit of each, and
+// the four independent chains of arithmetic run side by side (about 40 % less time here than
+// the same work one particle after the other, bench/README.md).
+void ParticleWorld::matchFour(uint32_t k) {
+  using namespace lanes;
+  MatchNode* n[4] = {&matchNode_[k], &matchNode_[k + 1], &matchNode_[k + 2], &matchNode_[k + 3]};
+  const MatchRest* r[4] = {&matchRest_[k], &matchRest_[k + 1], &matchRest_[k + 2], &matchRest_[k + 3]};
+  const MatchNode* p[4] = {&matchNode_[r[0]->parent], &matchNode_[r[1]->parent], &matchNode_[r[2]->parent],
+                           &matchNode_[r[3]->parent]};
+  const V3 x = pack(n[0]->x, n[1]->x, n[2]->x, n[3]->x);
+  const V3 restOffset = pack(r[0]->restOffset, r[1]->restOffset, r[2]->restOffset, r[3]->restOffset);
+  const V3 fromParent = pack(r[0]->fromParent, r[1]->fromParent, r[2]->fromParent, r[3]->fromParent);
+  // Eq. 14–15: the own moment, the parent's terms, then each child's in list order.
+  M3 A = pack(n[0]->moment, n[1]->moment, n[2]->moment, n[3]->moment);
+  const V3 px = pack(p[0]->x, p[1]->x, p[2]->x, p[3]->x);
+  const V3 d = pack(matchRest_[r[0]->parent].matchMass, matchRest_[r[1]->parent].matchMass,
+                    matchRest_[r[2]->parent].matchMass, matchRest_[r[3]->parent].matchMass) *
+               (px - x);
+  const M4 all = {-1, -1, -1, -1};
+  addMomentTerm(A, pack(p[0]->moment, p[1]->moment, p[2]->moment, p[3]->moment), d, restOffset - fromParent, all);
+  V3 offset = V3{splat(0.0f), splat(0.0f), splat(0.0f)} + d;
+  uint32_t most = 0;
+  for (int l = 0; l < 4; ++l) most = std::max(most, r[l]->childEnd - r[l]->childBegin);
+  for (uint32_t c = 0; c < most; ++c) {
+    uint32_t ck[4];
+    M4 has;
     for (int l = 0; l < 4; ++l) {
-      n[l]->x = lane(xn, l);
-      n[l]->q = lane(q, l);
-      n[l]->rotation = lane(own, l);
-      n[l]->frame = lane(frame, l);
-      n[l]->moment = lane(moment, l);
+      has[l] = r[l]->childBegin + c < r[l]->childEnd ? -1 : 0;
+      ck[l] = has[l] ? r[l]->childBegin + c : k;  // a lane out of children reads anything and keeps its sums
     }
-  };
-  parallelFor(0, pieceStart_.size() - 1, [&](size_t piece) {
-    const uint32_t begin = pieceStart_[piece], end = pieceStart_[piece + 1];
-    for (int iteration = 0; iteration < iterations; ++iteration) {
-      for (uint32_t k = begin; k < end; ++k) {
-        // Four particles side by side where none of them is another's parent (their parents
-        // come before k: the piece order is breadth first) and none is held by the drag.
-        if (k + 4 <= end && matchParent_[k] < k && matchParent_[k + 1] < k && matchParent_[k + 2] < k &&
-            matchParent_[k + 3] < k && pieceOrder_[k] != drag && pieceOrder_[k + 1] != drag &&
-            pieceOrder_[k + 2] != drag && pieceOrder_[k + 3] != drag) {
-          fitFour(k);
-          k += 3;
-          continue;
-        }
-        const MatchRest& r = matchRest_[k];
-        MatchNode& node = matchNode_[k];
-        const uint32_t i = pieceOrder_[k];
-        if (flags_[i] & kRoot) {
-          node.x = xr_[i];
-          node.q = r.qr;
-          node.frame = Quat::Identity();
-          node.moment = r.qr.toRotationMatrix() * r.restMoment;
-          continue;
-        }
-        // Eq. 14–15 for the group of k: A = Σ A_j + Σ m_j (x_j − c)(x̄_j − c̄)ᵀ. As Σ m_j (x̄_j − c̄)
-        // is zero, x_j − c may be replaced by x_j − x_k: this particle's own point term drops
-        // out, and positions are differences of nearby points, exact far from the origin.
-        Mat3 A = node.moment;
-        Vec3 offset = Vec3::Zero();  // Σ m_j (x_j − x_k)
-        if (r.parent != kNone) {
-          const MatchNode& pn = matchNode_[r.parent];
-          const float m = matchRest_[r.parent].matchMass;
-          const Vec3 d = m * (pn.x - node.x);
-          A += pn.moment + d * (r.restOffset - r.fromParent).transpose();
-          offset += d;
-        }
-        for (uint32_t c = r.childBegin; c < r.childEnd; ++c) {
-          const MatchNode& cn = matchNode_[c];
-          const MatchRest& cr = matchRest_[c];
-          const Vec3 d = cr.matchMass * (cn.x - node.x);
-          A += cn.moment + d * (cr.fromParent + r.restOffset).transpose();
-          offset += d;
-        }
-        const Vec3 center = node.x + offset * r.invGroupMass;
-        // Warm-started from the last fit, one iteration of the extraction per pass tracks the
-        // rotation (each step makes `iterations` passes).
-        node.rotation = extractRotation(A, node.rotation, 1);
+    const MatchNode* cn[4] = {&matchNode_[ck[0]], &matchNode_[ck[1]], &matchNode_[ck[2]], &matchNode_[ck[3]]};
+    const MatchRest* cr[4] = {&matchRest_[ck[0]], &matchRest_[ck[1]], &matchRest_[ck[2]], &matchRest_[ck[3]]};
+    const V3 dc = pack(cr[0]->matchMass, cr[1]->matchMass, cr[2]->matchMass, cr[3]->matchMass) *
+                  (pack(cn[0]->x, cn[1]->x, cn[2]->x, cn[3]->x) - x);
+    addMomentTerm(A, pack(cn[0]->moment, cn[1]->moment, cn[2]->moment, cn[3]->moment), dc,
+                  pack(cr[0]->fromParent, cr[1]->fromParent, cr[2]->fromParent, cr[3]->fromParent) + restOffset, has);
+    offset = select(has, offset + dc, offset);
+  }
+  const V3 center = x + pack(r[0]->invGroupMass, r[1]->invGroupMass, r[2]->invGroupMass, r[3]->invGroupMass) * offset;
+  const Q4 own = extractRotationOnce(A, pack(n[0]->rotation, n[1]->rotation, n[2]->rotation, n[3]->rotation));
+  // Eq. 3–4 and §4.3, as in the loop below.
+  const F4 ownWeight = pack(r[0]->ownWeight, r[1]->ownWeight, r[2]->ownWeight, r[3]->ownWeight);
+  const F4 parentWeight = pack(r[0]->parentWeight, r[1]->parentWeight, r[2]->parentWeight, r[3]->parentWeight);
+  const Q4 parentFrame = pack(p[0]->frame, p[1]->frame, p[2]->frame, p[3]->frame);
+  const V3 xg =
+      ownWeight * (rotate(own, restOffset) + center) + parentWeight * (rotate(parentFrame, fromParent) + px);
+  const Q4 Rp = select(dot4(parentFrame, own) < 0.0f, negate(parentFrame), parentFrame);
+  const Q4 rotation = normalized({ownWeight * own.x + parentWeight * Rp.x, ownWeight * own.y + parentWeight * Rp.y,
+                                  ownWeight * own.z + parentWeight * Rp.z, ownWeight * own.w + parentWeight * Rp.w});
+  const F4 s = pack(r[0]->stiffness, r[1]->stiffness, r[2]->stiffness, r[3]->stiffness);
+  V3 xn = x + s * (xg - x);
+  const Q4 qr = pack(r[0]->qr, r[1]->qr, r[2]->qr, r[3]->qr);
+  const Q4 nq = pack(n[0]->q, n[1]->q, n[2]->q, n[3]->q);
+  Q4 qg = rotation * qr;
+  qg = select(dot4(qg, nq) < 0.0f, negate(qg), qg);
+  const F4 keep = 1.0f - s;
+  const Q4 q =
+      normalized({keep * nq.x + s * qg.x, keep * nq.y + s * qg.y, keep * nq.z + s * qg.z, keep * nq.w + s * qg.w});
+  xn = xn + pack(r[0]->phi, r[1]->phi, r[2]->phi, r[3]->phi) *
+                (pack(r[0]->anchor, r[1]->anchor, r[2]->anchor, r[3]->anchor) - xn);  // eq. 5
+  const Q4 frame = q * conjugate(qr);
+  const M3 moment =
+      toRotationMatrix(q) * pack(r[0]->restMoment, r[1]->restMoment, r[2]->restMoment, r[3]->restMoment);
+  for (int l = 0; l < 4; ++l) {
+    n[l]->x = lane(xn, l);
+    n[l]->q = lane(q, l);
+    n[l]->rotation = lane(own, l);
+    n[l]->frame = lane(frame, l);
+    n[l]->moment = lane(moment, l);
+  }
+}
 
-        // Eq. 3–4: the goal is the weighted sum of the targets of the groups the particle is
-        // in — its own (eq. 3: R (x̄ − c̄) + c) and its parent's, which weighs more. The parent
-        // has already reached its goal: its group's target for this particle is taken in the
-        // parent's own frame (an oriented particle carries its rotation, R_p = q_p q̄_p⁻¹), which
-        // holds a chain straight where a three-point fit could bend.
-        Vec3 xg = r.ownWeight * (node.rotation * r.restOffset + center);
-        // Orientation: the own group's rotation applied to the rest orientation (MC11), blended
-        // by the same stiffness (normalised lerp: the two are close within one step).
-        // With a parent, its rotation joins in with the same weights as for the position.
-        Quat rotation = node.rotation;
-        if (r.parent != kNone) {
-          const MatchNode& pn = matchNode_[r.parent];
-          xg += r.parentWeight * (pn.frame * r.fromParent + pn.x);
-          Quat Rp = pn.frame;
-          if (Rp.coeffs().dot(rotation.coeffs()) < 0.0f) Rp.coeffs() = -Rp.coeffs();
-          rotation.coeffs() = r.ownWeight * rotation.coeffs() + r.parentWeight * Rp.coeffs();
-          rotation.normalize();
-        }
-        const float s = r.stiffness;
-        Vec3 x = node.x + s * (xg - node.x);  // x'_g = x_p + s (x_g − x_p), §4.3
-        Quat qg = rotation * r.qr;
-        if (qg.coeffs().dot(node.q.coeffs()) < 0.0f) qg.coeffs() = -qg.coeffs();
-        Quat q;
-        q.coeffs() = (1.0f - s) * node.q.coeffs() + s * qg.coeffs();
-        q.normalize();
-        if (i == drag) x += dragStrength_ * (dragTarget_ - x);
-        // Eq. 5 after the shape: x'_p = x_p + φ (x_anchor − x_p) (see applyAnchors()).
-        x += r.phi * (r.anchor - x);
-        node.x = x;
-        node.q = q;
-        node.frame = q * r.qr.conjugate();
-        node.moment = q.toRotationMatrix() * r.restMoment;
-      }
-    }
-  }, 1);
+// One particle's fit in its pass (eq. 3–5, 14–15, §4.3): its group's moment and rotation, the
+// goal blended from its own and its parent's group, the drag and the anchor.
+void ParticleWorld::matchOne(uint32_t k) {
+  const MatchRest& r = matchRest_[k];
+  MatchNode& node = matchNode_[k];
+  const uint32_t i = pieceOrder_[k];
+  if (flags_[i] & kRoot) {
+    node.x = xr_[i];
+    node.q = r.qr;
+    node.frame = Quat::Identity();
+    node.moment = r.qr.toRotationMatrix() * r.restMoment;
+    return;
+  }
+  // Eq. 14–15 for the group of k: A = Σ A_j + Σ m_j (x_j − c)(x̄_j − c̄)ᵀ. As Σ m_j (x̄_j − c̄)
+  // is zero, x_j − c may be replaced by x_j − x_k: this particle's own point term drops
+  // out, and positions are differences of nearby points, exact far from the origin.
+  Mat3 A = node.moment;
+  Vec3 offset = Vec3::Zero();  // Σ m_j (x_j − x_k)
+  if (r.parent != kNone) {
+    const MatchNode& pn = matchNode_[r.parent];
+    const float m = matchRest_[r.parent].matchMass;
+    const Vec3 d = m * (pn.x - node.x);
+    A += pn.moment + d * (r.restOffset - r.fromParent).transpose();
+    offset += d;
+  }
+  for (uint32_t c = r.childBegin; c < r.childEnd; ++c) {
+    const MatchNode& cn = matchNode_[c];
+    const MatchRest& cr = matchRest_[c];
+    const Vec3 d = cr.matchMass * (cn.x - node.x);
+    A += cn.moment + d * (cr.fromParent + r.restOffset).transpose();
+    offset += d;
+  }
+  const Vec3 center = node.x + offset * r.invGroupMass;
+  // Warm-started from the last fit, one iteration of the extraction per pass tracks the
+  // rotation (each step makes `iterations` passes).
+  node.rotation = extractRotation(A, node.rotation, 1);
 
-  parallelFor(0, count, [&](size_t k) {
-    const uint32_t i = pieceOrder_[k];
-    xp_[i] = matchNode_[k].x;
-    qp_[i] = matchNode_[k].q;
-    groupRotation_[i] = matchNode_[k].rotation;
-  }, 2048);
+  // Eq. 3–4: the goal is the weighted sum of the targets of the groups the particle is
+  // in — its own (eq. 3: R (x̄ − c̄) + c) and its parent's, which weighs more. The parent
+  // has already reached its goal: its group's target for this particle is taken in the
+  // parent's own frame (an oriented particle carries its rotation, R_p = q_p q̄_p⁻¹), which
+  // holds a chain straight where a three-point fit could bend.
+  Vec3 xg = r.ownWeight * (node.rotation * r.restOffset + center);
+  // Orientation: the own group's rotation applied to the rest orientation (MC11), blended
+  // by the same stiffness (normalised lerp: the two are close within one step).
+  // With a parent, its rotation joins in with the same weights as for the position.
+  Quat rotation = node.rotation;
+  if (r.parent != kNone) {
+    const MatchNode& pn = matchNode_[r.parent];
+    xg += r.parentWeight * (pn.frame * r.fromParent + pn.x);
+    Quat Rp = pn.frame;
+    if (Rp.coeffs().dot(rotation.coeffs()) < 0.0f) Rp.coeffs() = -Rp.coeffs();
+    rotation.coeffs() = r.ownWeight * rotation.coeffs() + r.parentWeight * Rp.coeffs();
+    rotation.normalize();
+  }
+  const float s = r.stiffness;
+  Vec3 x = node.x + s * (xg - node.x);  // x'_g = x_p + s (x_g − x_p), §4.3
+  Quat qg = rotation * r.qr;
+  if (qg.coeffs().dot(node.q.coeffs()) < 0.0f) qg.coeffs() = -qg.coeffs();
+  Quat q;
+  q.coeffs() = (1.0f - s) * node.q.coeffs() + s * qg.coeffs();
+  q.normalize();
+  if (i == dragParticle_) x += dragStrength_ * (dragTarget_ - x);
+  // Eq. 5 after the shape: x'_p = x_p + φ (x_anchor − x_p) (see applyAnchors()).
+  x += r.phi * (r.anchor - x);
+  node.x = x;
+  node.q = q;
+  node.frame = q * r.qr.conjugate();
+  node.moment = q.toRotationMatrix() * r.restMoment;
 }
 
 void ParticleWorld::integrate() {
@@ -388,7 +402,7 @@ void ParticleWorld::breakConnections() {
     if (!(flags_[i] & kActive) || parent_[i] == kNone || (flags_[i] & kApex)) continue;
     const ParticleSpecies& s = plants_[plant_[i]].species;
     if (s.breakThreshold <= 0.0f) continue;
-    if (strain(i) > (1.0f - s.breakThreshold) * s.maxStrain) broken.push_back(i);
+    if (strain(i) > breakingStrain(s)) broken.push_back(i);
   }
   for (uint32_t i : broken) {
     if (parent_[i] == kNone) continue;

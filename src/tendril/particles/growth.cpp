@@ -3,7 +3,7 @@
 #include "tendril/core/parallel.h"
 #include "tendril/core/random.h"
 #include "tendril/particles/world.h"
-#include "tendril/wind/growth_flow.h"
+#include "tendril/plant/growth_flow.h"
 
 #include <algorithm>
 #include <cmath>
@@ -16,16 +16,6 @@ constexpr uint64_t kPurposeWalk = purposeId("particles.random-walk");
 constexpr uint64_t kPurposeBud = purposeId("particles.lateral-bud");
 constexpr uint64_t kPurposeLeaf = purposeId("particles.leaf");
 constexpr int kOcclusionInterval = 8;  // steps between rebuilds of the occlusion grid
-
-struct ApexUpdate {
-  Quat growth = Quat::Identity();  // R_g (eq. 8), world frame
-  float halfLength = 0.0f;
-  bool grown = false;
-  bool anchor = false;
-  bool dormant = false;  // crowded: the apex stops growing
-  Vec3 anchorPoint = Vec3::Zero();
-  Vec3 leafUp = Vec3::Zero();  // preferred leaf normal here (away from the surface / to the light)
-};
 
 // Rotation turning unit `from` toward unit `to` by `angle` (never past it).
 Quat turnToward(const Vec3& from, const Vec3& to, float angle) {
@@ -136,8 +126,17 @@ Vec3 ParticleWorld::crowdAway(uint32_t i, float radius, int* count) const {
   return away;
 }
 
+struct ParticleWorld::ApexUpdate {
+  Quat growth = Quat::Identity();  // R_g (eq. 8), world frame
+  float halfLength = 0.0f;
+  bool grown = false;
+  bool anchor = false;
+  bool dormant = false;  // crowded: the apex stops growing
+  Vec3 anchorPoint = Vec3::Zero();
+  Vec3 leafUp = Vec3::Zero();  // preferred leaf normal here (away from the surface / to the light)
+};
+
 void ParticleWorld::grow(const env::Environment& env) {
-  const float dt = settings_.dt;
   if (step_ % kOcclusionInterval == 0) buildOcclusion(env);
 
   std::vector<uint32_t> apices;
@@ -147,232 +146,247 @@ void ParticleWorld::grow(const env::Environment& env) {
 
   // Parallel: every apex decides its growth from the environment (reads only).
   std::vector<ApexUpdate> updates(apices.size());
-  parallelFor(0, apices.size(), [&](size_t k) {
-    const uint32_t i = apices[k];
-    const Plant& pl = plants_[plant_[i]];
-    const ParticleSpecies& s = pl.species;
-    const float gdt = dt * s.growthSpeed;  // growth time of this step
-    ApexUpdate& u = updates[k];
-    // The tropisms steer the still-air orientation of an apex grown in wind (Growth-Flow
-    // §3.1.1: the shoot keeps its still-air direction and grows along it turned toward the
-    // wind), so they never undo the wind's turn: its forward vector here is the still-air one,
-    // and the growth rotation found for it is carried into the turned frame at the end.
-    const Quat turn = flow_[i].turn;
-    const bool turned = turn.coeffs() != Quat::Identity().coeffs();
-    const Vec3 forward = turned ? Vec3((turn.conjugate() * q_[i]) * Vec3::UnitY()) : Vec3(q_[i] * Vec3::UnitY());
-    Vec3 vf = forward;
-
-    // Light (eq. 7's occlusion O counts obstacles by shadow rays and plants by coverage).
-    const env::LightSample light = env.light(x_[i]);
-    const Vec3 toLight = light.nominal;
-    const float occluded = 1.0f - light.exposure * (1.0f - occlusion(x_[i], toLight));
-    const float exposure = 1.0f - occluded;
-    // Growth rate scales with the light the apex receives.
-    const float rate = s.growthRate * (s.minGrowthLight + (1.0f - s.minGrowthLight) * exposure);
-    u.halfLength = std::min(a_[i] + 0.5f * rate * gdt, targetHalfLength_[i]);
-    u.grown = u.halfLength >= targetHalfLength_[i] * 0.999f;
-
-    Quat rg = Quat::Identity();
-    u.leafUp = toLight;
-    Vec3 lightPull = toLight;  // the direction phototropism turns toward
-    // Surface adaption (eq. 6): a_a = v̂_s × v̂_f, α_a = (v̂_s · v̂_f) τ Δt turns the apex parallel
-    // to the surface it approaches. Farther than touching distance, it also turns toward the
-    // support ("the plant searches for a nearby support structure and directs its growth
-    // towards this direction").
-    if (auto sp = env.closestPoint(x_[i], s.adhesionDistance)) {
-      const Vec3 vs = -sp->away;
-      const float along = vs.dot(vf);
-      Vec3 axis = vs.cross(vf);
-      if (axis.squaredNorm() > 1e-12f) rg = axisAngle(axis, along * s.surfaceAdaption * gdt) * rg;
-      const float touch = b_[i] + s.anchorDistance;
-      if (sp->distance > touch) rg = turnToward(rg * vf, vs, s.surfaceAdaption * gdt) * rg;
-      // A climber on its support follows the light along the surface rather than leaving it.
-      const Vec3 along2 = toLight - toLight.dot(sp->away) * sp->away;
-      if (along2.squaredNorm() > 1e-8f) lightPull = along2.normalized();
-      u.leafUp = sp->away;
-      if (sp->distance <= touch) {
-        u.anchor = true;
-        u.anchorPoint = sp->point + sp->away * b_[i];
-      }
-    }
-    vf = (rg * forward).normalized();
-    // Branches spread out (as seed 003's tips avoid each other): stems of other branches —
-    // of any plant — within one particle length push the apex aside; where more of them than
-    // the species' crowding limit surround it, the apex stops.
-    if (s.crowding > 0) {
-      int count = 0;
-      const Vec3 away = crowdAway(i, 2.0f * targetHalfLength_[i], &count);
-      if (count > s.crowding) {
-        u.dormant = true;
-        return;
-      }
-      Vec3 side = away - away.dot(vf) * vf;
-      if (side.squaredNorm() > 1e-12f && s.spreading > 0.0f)
-        rg = turnToward(vf, side.normalized(), std::min(1.0f, float(count) / float(s.crowding)) * s.spreading * gdt) * rg;
-    }
-    vf = (rg * forward).normalized();
-    // Phototropism (eq. 7): α_p = (1 − O) η Δt toward the light (axis v̂_f × v̂_l).
-    if (lightPull.squaredNorm() > 0.0f)
-      rg = turnToward(vf, lightPull, (1.0f - occluded) * s.phototropism * gdt) * rg;
-    vf = (rg * forward).normalized();
-    // Attractors and repulsors painted by the user (§5.1): the weighted average of nearby
-    // stroke points.
-    const Vec3 pull = env.attraction(x_[i]);
-    if (pull.squaredNorm() > 1e-12f)
-      rg = turnToward(vf, pull.normalized(), s.attraction * gdt * std::min(1.0f, pull.norm())) * rg;
-    vf = (rg * forward).normalized();
-    // Directed random walk (§3).
-    if (s.randomWalk > 0.0f) {
-      Rng r(RandomKey{pl.seed ^ mix64(settings_.seed), plant_[i], i, step_, kPurposeWalk});
-      Vec3 axis = vf.cross(r.unitVector());
-      if (axis.squaredNorm() > 1e-8f) rg = axisAngle(axis, s.randomWalk * gdt * r.uniform(-1.0f, 1.0f)) * rg;
-    }
-    u.growth = turned ? Quat((turn * rg.normalized() * turn.conjugate()).normalized()) : rg.normalized();
-  }, 16);
+  parallelFor(0, apices.size(), [&](size_t k) { decideApex(apices[k], env, updates[k]); }, 16);
 
   // Sequential: apply in apex order (eq. 8–10), spawn successors, buds and leaves.
   for (size_t k = 0; k < apices.size(); ++k) {
     const uint32_t i = apices[k];
     if (!(flags_[i] & kActive) || !(flags_[i] & kApex)) continue;
-    Plant& pl = plants_[plant_[i]];
-    const ParticleSpecies& s = pl.species;
-    const ApexUpdate& u = updates[k];
-    if (u.dormant) {
-      flags_[i] &= ~kApex;
-      continue;
-    }
-    // Eq. 9: R = R R_g, R̄ = R̄ R⁻¹ R_g — the growth rotation enters the current and the rest
-    // state alike, keeping the particle's deformation (current relative to rest).
-    const Quat deformation = (q_[i] * qr_[i].conjugate()).normalized();
-    q_[i] = (u.growth * q_[i]).normalized();
-    qr_[i] = (deformation.conjugate() * q_[i]).normalized();
-    qp_[i] = q_[i];
-    a_[i] = u.halfLength;
-    // Eq. 10: x = x_h + R u_f (current), x̄ = x̄_h + R̄ u_f (rest), from the parent's head.
-    const uint32_t p = parent_[i];
-    if (p != kNone) {
-      x_[i] = head(p) + q_[i] * Vec3(0, a_[i], 0);
-      xr_[i] = xr_[p] + qr_[p] * Vec3(0, a_[p], 0) + qr_[i] * Vec3(0, a_[i], 0);
-      xp_[i] = x_[i];
-    }
-    updateMass(i);
-    if (u.anchor && !(flags_[i] & kAnchored)) {
-      flags_[i] |= kAnchored;
-      anchor_[i] = u.anchorPoint;
-    }
-    if (!u.grown) continue;
-
-    flags_[i] = (flags_[i] & ~kApex) | kGrown;
-    if (pl.particles + 1 + s.maxLateralBuds > size_t(s.maxParticles)) {
-      if (!pl.capped)
-        log::warn("plant \"{}\" reached max_particles ({}): growth stopped; raise the species' max_particles to "
-                  "grow further",
-                  pl.name, s.maxParticles);
-      pl.capped = true;
-      continue;
-    }
-    // Growth-Flow (seed 001, Algorithm 1): each new internode is one unit of growth time. In a
-    // wind above the species' w_min the internodes that grow from this one are shorter (eq. 8)
-    // and thicker (eq. 7), bear smaller (eq. 17) and thicker (eq. 16) leaves, and grow along
-    // their still-air direction b turned by the whole of eq. 9's angle α_t about b × w (their
-    // tropisms keep steering b, see above); leaves are not grown where the wind would tear them
-    // off (Algorithm 2). A calm wind changes nothing.
-    wind::GrowthFlowStep flow;
-    Vec3 windHere = Vec3::Zero();
-    if (!env.windField().settings().calm()) {
-      windHere = env.wind(head(i), time_);
-      flow = wind::growthStep(windHere.norm(), s.growthFlow);
-    }
-    FlowState grown = flow_[i];
-    if (flow.active()) {
-      grown.angle = wind::nextGrowthAngle(grown.angle < 0.0f ? s.growthFlow.angle0 : grown.angle, flow);
-      grown.length *= flow.length;
-      grown.leafSize *= flow.leafRadius;
-      grown.leafThickness *= flow.leafThickness;
-    }
-    // Sets a new internode's Growth-Flow state, length and rest orientation after spawn().
-    // The length factor stays with the lineage (a calm unit multiplies it by 1), applied to
-    // the species' current length, so live edits of particle_length still take effect.
-    auto windGrowth = [&](uint32_t c, const Quat& deformation) {
-      if (!flow.active() && grown.length == 1.0f) return;  // never grew in wind: untouched
-      flow_[c] = grown;
-      float half = targetHalfLength_[c] * grown.length;  // spawn() set the species' length
-      if (flow.active() && s.growthFlow.maxLength > 0.0f) half = std::min(half, 0.5f * s.growthFlow.maxLength);
-      targetHalfLength_[c] = half;
-      a_[c] = std::min(a_[c], half);
-      if (flow.active()) {
-        // The new internode's still-air orientation is its spawned one without the parent's
-        // turn; it grows along that turned by the lineage's whole angle α_t (Algorithm 1).
-        const Quat still = (flow_[i].turn.conjugate() * q_[c]).normalized();
-        const Vec3 b = still * Vec3::UnitY();
-        flow_[c].turn = Quat::FromTwoVectors(b, wind::windGrowthDirection(b, windHere, grown.angle)).normalized();
-        q_[c] = qp_[c] = (flow_[c].turn * still).normalized();
-      }
-      qr_[c] = (deformation.conjugate() * q_[c]).normalized();
-      groupRotation_[c] = (q_[c] * qr_[c].conjugate()).normalized();
-      x_[c] = xp_[c] = head(i) + q_[c] * Vec3(0, a_[c], 0);
-      xr_[c] = xr_[i] + qr_[i] * Vec3(0, a_[i], 0) + qr_[c] * Vec3(0, a_[c], 0);
-      updateMass(c);
-    };
-    // The successor continues the branch.
-    const uint32_t plantId = plant_[i];
-    const Quat deform = (q_[i] * qr_[i].conjugate()).normalized();
-    uint32_t next = spawn(plantId, i, q_[i], qr_[i], b_[i] * s.apexTaper * flow.radius, kApex);
-    windGrowth(next, deform);
-    branchIndex_[next] = branchIndex_[i] + 1;
-    // Lateral buds: up to B of them, each with probability BP, turned by up to V · 90°.
-    Rng bud(RandomKey{pl.seed ^ mix64(settings_.seed), plantId, i, step_, kPurposeBud});
-    for (int b = 0; b < s.maxLateralBuds; ++b) {
-      if (!bud.bernoulli(s.branchProbability)) continue;
-      const Vec3 forward = q_[i] * Vec3::UnitY();
-      Vec3 axis = forward.cross(bud.unitVector());
-      if (axis.squaredNorm() < 1e-8f) axis = anyPerpendicular(forward);
-      // Half to full V·90°, so that laterals part from the successor.
-      const float angle = s.branchVariance * radians(90.0f) * bud.uniform(0.5f, 1.0f);
-      const Quat turn = axisAngle(axis, angle);
-      const Quat q = (turn * q_[i]).normalized();
-      uint32_t lateral = spawn(plantId, i, q, (deform.conjugate() * q).normalized(),
-                               b_[i] * s.thicknessFalloff * flow.radius, kApex);
-      windGrowth(lateral, deform);
-      order_[lateral] = static_cast<uint16_t>(order_[i] + 1);
-      branchIndex_[lateral] = 1;
-    }
-    // Leaves: phyllotaxis angle and step along the branch, a little random jitter, turned
-    // toward the light and away from a nearby surface.
-    const bool leafTorn = flow.active() && wind::leafDetaches(windHere.norm(), s.growthFlow);
-    if (s.leafStep > 0 && s.leafSize > 0.0f && !s.leafShapes.empty() && branchIndex_[i] % uint32_t(s.leafStep) == 0 &&
-        !leafTorn) {
-      const float leafSize = s.leafSize * flow_[i].leafSize;
-      const float leafThickness = s.leafThickness * flow_[i].leafThickness;
-      Rng lr(RandomKey{pl.seed ^ mix64(settings_.seed), plantId, i, step_, kPurposeLeaf});
-      const float around = float(branchIndex_[i]) * s.phyllotaxisAngle + s.leafJitter * lr.uniform(-1.0f, 1.0f);
-      // Particle frame: the blade leaves the stem sideways (+Z turned `around` the stem), upper
-      // side up the stem; then it turns toward the preferred normal.
-      Quat local = axisAngle(Vec3::UnitY(), around) * axisAngle(Vec3::UnitX(), radians(80.0f));
-      Quat world = q_[i] * local;
-      if (u.leafUp.squaredNorm() > 0.0f) {
-        const Vec3 normal = world * Vec3::UnitZ();
-        world = turnToward(normal, u.leafUp, s.leafLightTurn * angleBetween(normal, u.leafUp)) * world;
-      }
-      const uint16_t shape = static_cast<uint16_t>(lr.below(uint32_t(s.leafShapes.size())));
-      if (pl.particles < size_t(s.leafParticleLimit)) {
-        // Small plants: the leaf is a particle of its own (§4.3), hanging from the stem.
-        uint32_t leaf = spawn(plantId, i, world, (deform.conjugate() * world).normalized(),
-                              std::max(s.leafThickness * 4.0f, s.minRadius), kLeaf);
-        targetHalfLength_[leaf] = 0.5f * leafSize;
-        a_[leaf] = 0.05f * leafSize;
-        flow_[leaf] = flow_[i];
-        leafShape_[leaf] = shape;
-        order_[leaf] = order_[i];
-        x_[leaf] = xp_[leaf] = head(i) + world * Vec3(0, a_[leaf], 0);
-        xr_[leaf] = xr_[i] + qr_[i] * Vec3(0, a_[i], 0) + qr_[leaf] * Vec3(0, a_[leaf], 0);
-        updateMass(leaf);
-      } else {
-        leaves_.push_back({i, (q_[i].conjugate() * world).normalized(), 0.05f * leafSize, leafSize, shape, leafThickness});
-      }
-    }
+    applyApex(i, updates[k], env);
   }
 
+  growLeaves();
+  attachLeavesOfLargePlants();
+  thicken();
+}
+
+// An apex's growth this step from the light, the surfaces, other branches, the user's strokes
+// and a random walk (eq. 6–7, §3, §5.1); reads only.
+void ParticleWorld::decideApex(uint32_t i, const env::Environment& env, ApexUpdate& u) const {
+  const float dt = settings_.dt;
+  const Plant& pl = plants_[plant_[i]];
+  const ParticleSpecies& s = pl.species;
+  const float gdt = dt * s.growthSpeed;  // growth time of this step
+  // The tropisms steer the still-air orientation of an apex grown in wind (Growth-Flow
+  // §3.1.1: the shoot keeps its still-air direction and grows along it turned toward the
+  // wind), so they never undo the wind's turn: its forward vector here is the still-air one,
+  // and the growth rotation found for it is carried into the turned frame at the end.
+  const Quat turn = flow_[i].turn;
+  const bool turned = turn.coeffs() != Quat::Identity().coeffs();
+  const Vec3 forward = turned ? Vec3((turn.conjugate() * q_[i]) * Vec3::UnitY()) : Vec3(q_[i] * Vec3::UnitY());
+  Vec3 vf = forward;
+
+  // Light (eq. 7's occlusion O counts obstacles by shadow rays and plants by coverage).
+  const env::LightSample light = env.light(x_[i]);
+  const Vec3 toLight = light.nominal;
+  const float occluded = 1.0f - light.exposure * (1.0f - occlusion(x_[i], toLight));
+  const float exposure = 1.0f - occluded;
+  // Growth rate scales with the light the apex receives.
+  const float rate = s.growthRate * (s.minGrowthLight + (1.0f - s.minGrowthLight) * exposure);
+  u.halfLength = std::min(a_[i] + 0.5f * rate * gdt, targetHalfLength_[i]);
+  u.grown = u.halfLength >= targetHalfLength_[i] * 0.999f;
+
+  Quat rg = Quat::Identity();
+  u.leafUp = toLight;
+  Vec3 lightPull = toLight;  // the direction phototropism turns toward
+  // Surface adaption (eq. 6): a_a = v̂_s × v̂_f, α_a = (v̂_s · v̂_f) τ Δt turns the apex parallel
+  // to the surface it approaches. Farther than touching distance, it also turns toward the
+  // support ("the plant searches for a nearby support structure and directs its growth
+  // towards this direction").
+  if (auto sp = env.closestPoint(x_[i], s.adhesionDistance)) {
+    const Vec3 vs = -sp->away;
+    const float along = vs.dot(vf);
+    Vec3 axis = vs.cross(vf);
+    if (axis.squaredNorm() > 1e-12f) rg = axisAngle(axis, along * s.surfaceAdaption * gdt) * rg;
+    const float touch = b_[i] + s.anchorDistance;
+    if (sp->distance > touch) rg = turnToward(rg * vf, vs, s.surfaceAdaption * gdt) * rg;
+    // A climber on its support follows the light along the surface rather than leaving it.
+    const Vec3 along2 = toLight - toLight.dot(sp->away) * sp->away;
+    if (along2.squaredNorm() > 1e-8f) lightPull = along2.normalized();
+    u.leafUp = sp->away;
+    if (sp->distance <= touch) {
+      u.anchor = true;
+      u.anchorPoint = sp->point + sp->away * b_[i];
+    }
+  }
+  vf = (rg * forward).normalized();
+  // Branches spread out (as seed 003's tips avoid each other): stems of other branches —
+  // of any plant — within one particle length push the apex aside; where more of them than
+  // the species' crowding limit surround it, the apex stops.
+  if (s.crowding > 0) {
+    int count = 0;
+    const Vec3 away = crowdAway(i, 2.0f * targetHalfLength_[i], &count);
+    if (count > s.crowding) {
+      u.dormant = true;
+      return;
+    }
+    Vec3 side = away - away.dot(vf) * vf;
+    if (side.squaredNorm() > 1e-12f && s.spreading > 0.0f)
+      rg = turnToward(vf, side.normalized(), std::min(1.0f, float(count) / float(s.crowding)) * s.spreading * gdt) * rg;
+  }
+  vf = (rg * forward).normalized();
+  // Phototropism (eq. 7): α_p = (1 − O) η Δt toward the light (axis v̂_f × v̂_l).
+  if (lightPull.squaredNorm() > 0.0f)
+    rg = turnToward(vf, lightPull, (1.0f - occluded) * s.phototropism * gdt) * rg;
+  vf = (rg * forward).normalized();
+  // Attractors and repulsors painted by the user (§5.1): the weighted average of nearby
+  // stroke points.
+  const Vec3 pull = env.attraction(x_[i]);
+  if (pull.squaredNorm() > 1e-12f)
+    rg = turnToward(vf, pull.normalized(), s.attraction * gdt * std::min(1.0f, pull.norm())) * rg;
+  vf = (rg * forward).normalized();
+  // Directed random walk (§3).
+  if (s.randomWalk > 0.0f) {
+    Rng r(RandomKey{pl.seed ^ mix64(settings_.seed), plant_[i], i, step_, kPurposeWalk});
+    Vec3 axis = vf.cross(r.unitVector());
+    if (axis.squaredNorm() > 1e-8f) rg = axisAngle(axis, s.randomWalk * gdt * r.uniform(-1.0f, 1.0f)) * rg;
+  }
+  u.growth = turned ? Quat((turn * rg.normalized() * turn.conjugate()).normalized()) : rg.normalized();
+}
+
+// Applies an apex's update (eq. 8–10); a full-grown apex spawns its successor, lateral buds
+// and a leaf, in wind as Growth-Flow says.
+void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Environment& env) {
+  Plant& pl = plants_[plant_[i]];
+  const ParticleSpecies& s = pl.species;
+  if (u.dormant) {
+    flags_[i] &= ~kApex;
+    return;
+  }
+  // Eq. 9: R = R R_g, R̄ = R̄ R⁻¹ R_g — the growth rotation enters the current and the rest
+  // state alike, keeping the particle's deformation (current relative to rest).
+  const Quat deformation = (q_[i] * qr_[i].conjugate()).normalized();
+  q_[i] = (u.growth * q_[i]).normalized();
+  qr_[i] = (deformation.conjugate() * q_[i]).normalized();
+  qp_[i] = q_[i];
+  a_[i] = u.halfLength;
+  // Eq. 10: x = x_h + R u_f (current), x̄ = x̄_h + R̄ u_f (rest), from the parent's head.
+  const uint32_t p = parent_[i];
+  if (p != kNone) {
+    x_[i] = head(p) + q_[i] * Vec3(0, a_[i], 0);
+    xr_[i] = xr_[p] + qr_[p] * Vec3(0, a_[p], 0) + qr_[i] * Vec3(0, a_[i], 0);
+    xp_[i] = x_[i];
+  }
+  updateMass(i);
+  if (u.anchor && !(flags_[i] & kAnchored)) {
+    flags_[i] |= kAnchored;
+    anchor_[i] = u.anchorPoint;
+  }
+  if (!u.grown) return;
+
+  flags_[i] = (flags_[i] & ~kApex) | kGrown;
+  if (pl.particles + 1 + s.maxLateralBuds > size_t(s.maxParticles)) {
+    if (!pl.capped)
+      log::warn("plant \"{}\" reached max_particles ({}): growth stopped; raise the species' max_particles to "
+                "grow further",
+                pl.name, s.maxParticles);
+    pl.capped = true;
+    return;
+  }
+  // Growth-Flow (seed 001, Algorithm 1): each new internode is one unit of growth time. In a
+  // wind above the species' w_min the internodes that grow from this one are shorter (eq. 8)
+  // and thicker (eq. 7), bear smaller (eq. 17) and thicker (eq. 16) leaves, and grow along
+  // their still-air direction b turned by the whole of eq. 9's angle α_t about b × w (their
+  // tropisms keep steering b, see above); leaves are not grown where the wind would tear them
+  // off (Algorithm 2). A calm wind changes nothing.
+  plant::GrowthFlowStep flow;
+  Vec3 windHere = Vec3::Zero();
+  if (!env.windField().settings().calm()) {
+    windHere = env.wind(head(i), time_);
+    flow = plant::growthStep(windHere.norm(), s.growthFlow);
+  }
+  FlowState grown = flow_[i];
+  if (flow.active()) {
+    grown.angle = plant::nextGrowthAngle(grown.angle < 0.0f ? s.growthFlow.angle0 : grown.angle, flow);
+    grown.length *= flow.length;
+    grown.leafSize *= flow.leafRadius;
+    grown.leafThickness *= flow.leafThickness;
+  }
+  // Sets a new internode's Growth-Flow state, length and rest orientation after spawn().
+  // The length factor stays with the lineage (a calm unit multiplies it by 1), applied to
+  // the species' current length, so live edits of particle_length still take effect.
+  auto windGrowth = [&](uint32_t c, const Quat& deformation) {
+    if (!flow.active() && grown.length == 1.0f) return;  // never grew in wind: untouched
+    flow_[c] = grown;
+    float half = targetHalfLength_[c] * grown.length;  // spawn() set the species' length
+    if (flow.active() && s.growthFlow.maxLength > 0.0f) half = std::min(half, 0.5f * s.growthFlow.maxLength);
+    targetHalfLength_[c] = half;
+    a_[c] = std::min(a_[c], half);
+    if (flow.active()) {
+      // The new internode's still-air orientation is its spawned one without the parent's
+      // turn; it grows along that turned by the lineage's whole angle α_t (Algorithm 1).
+      const Quat still = (flow_[i].turn.conjugate() * q_[c]).normalized();
+      const Vec3 b = still * Vec3::UnitY();
+      flow_[c].turn = Quat::FromTwoVectors(b, plant::windGrowthDirection(b, windHere, grown.angle)).normalized();
+      q_[c] = qp_[c] = (flow_[c].turn * still).normalized();
+    }
+    qr_[c] = (deformation.conjugate() * q_[c]).normalized();
+    groupRotation_[c] = (q_[c] * qr_[c].conjugate()).normalized();
+    x_[c] = xp_[c] = head(i) + q_[c] * Vec3(0, a_[c], 0);
+    xr_[c] = xr_[i] + qr_[i] * Vec3(0, a_[i], 0) + qr_[c] * Vec3(0, a_[c], 0);
+    updateMass(c);
+  };
+  // The successor continues the branch.
+  const uint32_t plantId = plant_[i];
+  const Quat deform = (q_[i] * qr_[i].conjugate()).normalized();
+  uint32_t next = spawn(plantId, i, q_[i], qr_[i], b_[i] * s.apexTaper * flow.radius, kApex);
+  windGrowth(next, deform);
+  branchIndex_[next] = branchIndex_[i] + 1;
+  // Lateral buds: up to B of them, each with probability BP, turned by up to V · 90°.
+  Rng bud(RandomKey{pl.seed ^ mix64(settings_.seed), plantId, i, step_, kPurposeBud});
+  for (int b = 0; b < s.maxLateralBuds; ++b) {
+    if (!bud.bernoulli(s.branchProbability)) continue;
+    const Vec3 forward = q_[i] * Vec3::UnitY();
+    Vec3 axis = forward.cross(bud.unitVector());
+    if (axis.squaredNorm() < 1e-8f) axis = anyPerpendicular(forward);
+    // Half to full V·90°, so that laterals part from the successor.
+    const float angle = s.branchVariance * radians(90.0f) * bud.uniform(0.5f, 1.0f);
+    const Quat turn = axisAngle(axis, angle);
+    const Quat q = (turn * q_[i]).normalized();
+    uint32_t lateral = spawn(plantId, i, q, (deform.conjugate() * q).normalized(),
+                             b_[i] * s.thicknessFalloff * flow.radius, kApex);
+    windGrowth(lateral, deform);
+    order_[lateral] = static_cast<uint16_t>(order_[i] + 1);
+    branchIndex_[lateral] = 1;
+  }
+  // Leaves: phyllotaxis angle and step along the branch, a little random jitter, turned
+  // toward the light and away from a nearby surface.
+  const bool leafTorn = flow.active() && plant::leafDetaches(windHere.norm(), s.growthFlow);
+  if (s.leafStep > 0 && s.leafSize > 0.0f && !s.leafShapes.empty() && branchIndex_[i] % uint32_t(s.leafStep) == 0 &&
+      !leafTorn) {
+    const float leafSize = s.leafSize * flow_[i].leafSize;
+    const float leafThickness = s.leafThickness * flow_[i].leafThickness;
+    Rng lr(RandomKey{pl.seed ^ mix64(settings_.seed), plantId, i, step_, kPurposeLeaf});
+    const float around = float(branchIndex_[i]) * s.phyllotaxisAngle + s.leafJitter * lr.uniform(-1.0f, 1.0f);
+    // Particle frame: the blade leaves the stem sideways (+Z turned `around` the stem), upper
+    // side up the stem; then it turns toward the preferred normal.
+    Quat local = axisAngle(Vec3::UnitY(), around) * axisAngle(Vec3::UnitX(), radians(80.0f));
+    Quat world = q_[i] * local;
+    if (u.leafUp.squaredNorm() > 0.0f) {
+      const Vec3 normal = world * Vec3::UnitZ();
+      world = turnToward(normal, u.leafUp, s.leafLightTurn * angleBetween(normal, u.leafUp)) * world;
+    }
+    const uint16_t shape = static_cast<uint16_t>(lr.below(uint32_t(s.leafShapes.size())));
+    if (pl.particles < size_t(s.leafParticleLimit)) {
+      // Small plants: the leaf is a particle of its own (§4.3), hanging from the stem.
+      uint32_t leaf = spawn(plantId, i, world, (deform.conjugate() * world).normalized(),
+                            std::max(s.leafThickness * 4.0f, s.minRadius), kLeaf);
+      targetHalfLength_[leaf] = 0.5f * leafSize;
+      a_[leaf] = 0.05f * leafSize;
+      flow_[leaf] = flow_[i];
+      leafShape_[leaf] = shape;
+      order_[leaf] = order_[i];
+      x_[leaf] = xp_[leaf] = head(i) + world * Vec3(0, a_[leaf], 0);
+      xr_[leaf] = xr_[i] + qr_[i] * Vec3(0, a_[i], 0) + qr_[leaf] * Vec3(0, a_[leaf], 0);
+      updateMass(leaf);
+    } else {
+      leaves_.push_back({i, (q_[i].conjugate() * world).normalized(), 0.05f * leafSize, leafSize, shape, leafThickness});
+    }
+  }
+}
+
+void ParticleWorld::growLeaves() {
+  const float dt = settings_.dt;
   // Leaves grow with their branch (relative to the branch's growth speed).
   for (uint32_t i = 0; i < capacity(); ++i) {
     if (!(flags_[i] & kActive) || !(flags_[i] & kLeaf) || (flags_[i] & kDetached)) continue;
@@ -394,7 +408,9 @@ void ParticleWorld::grow(const env::Environment& env) {
     if (l.size < l.maxSize)
       l.size = std::min(l.maxSize, l.size + s.growthRate * l.maxSize / std::max(s.particleLength, 1e-6f) * dt * s.growthSpeed);
   }
+}
 
+void ParticleWorld::attachLeavesOfLargePlants() {
   // Large plants keep their leaves attached to branch particles instead (§4.3).
   for (uint32_t pid = 0; pid < plants_.size(); ++pid) {
     const ParticleSpecies& s = plants_[pid].species;
@@ -407,7 +423,10 @@ void ParticleWorld::grow(const env::Environment& env) {
       release(i);
     }
   }
+}
 
+void ParticleWorld::thicken() {
+  const float dt = settings_.dt;
   // Secondary growth: older particles thicken toward the pipe-model radius of what they carry.
   const size_t n = capacity();
   std::vector<float>& nextRadius = nextRadius_;

@@ -7,7 +7,7 @@
 
 namespace tendril::particles {
 
-struct ParticleParams : scene::ModelParams {
+struct ParticleParams : models::ModelParams {
   ParticleSpecies species;
 };
 
@@ -18,23 +18,52 @@ models::ModelType particleModelType();
 ParticleSpecies loadSpecies(const std::string& nameOrPath, const std::filesystem::path& baseDir,
                             const std::string& source = "species", const std::string& pointer = "");
 
-// The Session-facing system: all particle plants of a scene in one ParticleWorld.
-class ParticlePlantSystem final : public models::PlantSystem {
+// The Session-facing system: all particle plants of a scene in one ParticleWorld. Particles
+// can be held and pulled, carry new branches and report their strain (handles are particle
+// ids), and the world takes the air's push.
+class ParticlePlantSystem final : public models::PlantSystem,
+                                  public models::Grip,
+                                  public models::BranchSeeding,
+                                  public models::StrainGauge,
+                                  public models::LiveSettings {
  public:
   explicit ParticlePlantSystem(const models::SystemContext& context);
-  void addPlant(const scene::PlantSpec& spec, const env::Environment& env) override;
+  void addPlant(const models::PlantSpec& spec, const env::Environment& env) override;
   void step(const env::Environment& env) override;
   bool finished() const override { return false; }  // a particle world never stops moving
   size_t plantCount() const override { return world_.plantCount(); }
   plant::PlantModel snapshot(size_t plant) const override { return world_.snapshot(uint32_t(plant)); }
   std::vector<plant::PlantModel> snapshots() const override { return world_.snapshots(); }
   size_t segmentCount() const override { return world_.particleCount(); }
-  wind::GrowthFlowSpecies growthFlow(size_t plant) const override { return world_.species(uint32_t(plant)).growthFlow; }
+  plant::GrowthFlowSpecies growthFlow(size_t plant) const override { return world_.species(uint32_t(plant)).growthFlow; }
   void saveState(ArchiveWriter& out) const override { world_.saveState(out); }
   void loadState(ArchiveReader& in) override { world_.loadState(in); }
-  void setParams(size_t plant, const scene::PlantSpec& spec) override;
+  void setParams(size_t plant, const models::PlantSpec& spec) override;
   // The node's particle and everything beyond it fall and disappear (ParticleWorld::cut).
   void cut(size_t plant, uint32_t node) override;
+
+  const models::Grip* grip() const override { return this; }
+  const models::BranchSeeding* branchSeeding() const override { return this; }
+  const models::StrainGauge* strainGauge() const override { return this; }
+  const models::LiveSettings* liveSettings() const override { return this; }
+  const models::AirCoupling* airCoupling() const override { return &world_; }
+  using models::PlantSystem::airCoupling, models::PlantSystem::branchSeeding, models::PlantSystem::grip,
+      models::PlantSystem::liveSettings, models::PlantSystem::strainGauge;
+
+  // Grip
+  std::vector<uint32_t> nodeHandles(size_t plant) const override { return world_.snapshotParticles(uint32_t(plant)); }
+  void requireHandle(size_t plant, uint32_t handle, const std::string& what) const override;
+  void setDrag(uint32_t handle, const Vec3& target, float strength) override { world_.setDrag(handle, target, strength); }
+  void clearDrag() override { world_.clearDrag(); }
+  // BranchSeeding
+  void seedBranch(size_t plant, uint32_t handle, const Vec3& direction, const std::string& what) override;
+  void seedBranchNear(const env::Stroke& stroke) override;
+  // StrainGauge: branch particles that are not growing apices are judged (particles/dynamics.cpp).
+  std::vector<NodeStrain> nodeStrain(size_t plant) const override;
+  // LiveSettings: Table 2 of seed 000 and the growth and mechanics settings beside it.
+  std::string settingsTitle(size_t plant) const override;
+  std::vector<Setting> liveSettings(size_t plant) const override;
+
   ParticleWorld& world() { return world_; }
   const ParticleWorld& world() const { return world_; }
 

@@ -64,7 +64,7 @@ void readParticleSpecies(JsonObject& o, ParticleSpecies& s, const std::string& b
     l->finish();
   }
   if (auto b = o.optionalObject("bark")) plant::readBark(*b, s.bark, baseDir);
-  if (auto g = o.optionalObject("growth_flow")) wind::readGrowthFlow(*g, s.growthFlow);
+  if (auto g = o.optionalObject("growth_flow")) plant::readGrowthFlow(*g, s.growthFlow);
 }
 
 }  // namespace tendril::particles

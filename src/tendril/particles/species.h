@@ -6,7 +6,7 @@
 
 #include "tendril/core/math.h"
 #include "tendril/plant/plant_model.h"
-#include "tendril/wind/growth_flow.h"
+#include "tendril/plant/growth_flow.h"
 
 #include <string>
 #include <vector>
@@ -83,8 +83,12 @@ struct ParticleSpecies {
   plant::BarkMaterial bark;
 
   // How growth answers the wind (seed 001, Growth-Flow). See docs/wind.md.
-  wind::GrowthFlowSpecies growthFlow;
+  plant::GrowthFlowSpecies growthFlow;
 };
+
+// The strain (|d − d̄| / d̄) above which a connection of the species breaks (§4.3): (1 − t_s)·
+// maxStrain. Connections of a species with t_s = 0 never break; maxStrain is then their scale.
+inline float breakingStrain(const ParticleSpecies& s) { return (1.0f - s.breakThreshold) * s.maxStrain; }
 
 // Reads the fields present in `o` over `s` (absent fields keep their value). Strict: unknown
 // keys, wrong types and out-of-range values throw Error naming file and JSON pointer.

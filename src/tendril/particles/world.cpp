@@ -189,6 +189,18 @@ float ParticleWorld::strain(uint32_t i) const {
   return std::abs((x_[i] - x_[p]).norm() - rest) / rest;
 }
 
+models::AirBodies ParticleWorld::airBodies() const {
+  airIds_.clear();
+  for (uint32_t i = 0; i < capacity(); ++i)
+    if ((flags_[i] & kActive) && (flags_[i] & kGrown) && !(flags_[i] & kLeaf)) airIds_.push_back(i);
+  models::AirBodies b;
+  b.ids = airIds_;
+  b.position = x_, b.velocity = v_, b.orientation = q_;
+  b.halfLength = a_, b.radius = b_, b.mass = m_;
+  b.slots = capacity();
+  return b;
+}
+
 double ParticleWorld::kineticEnergy() const {
   double e = 0.0;
   for (uint32_t i = 0; i < capacity(); ++i) {

@@ -20,11 +20,13 @@
 
 #include "tendril/core/archive.h"
 #include "tendril/env/environment.h"
+#include "tendril/models/capabilities.h"
 #include "tendril/particles/species.h"
 #include "tendril/plant/plant_model.h"
 
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -73,7 +75,9 @@ struct AttachedLeaf {
   float thickness = 0.0f;  // blade thickness (m)
 };
 
-class ParticleWorld {
+// The world takes part in the simulated air (models::AirCoupling): its grown branch particles
+// (not leaves) are the air's bodies, and the air's push is the external acceleration of eq. 1.
+class ParticleWorld final : public models::AirCoupling {
  public:
   explicit ParticleWorld(WorldSettings settings = {});
 
@@ -97,6 +101,10 @@ class ParticleWorld {
   const StepTimings& timings() const { return timings_; }
   // External acceleration per particle (e.g. from the SPH wind), added in eq. 1; empty = none.
   std::vector<Vec3>& externalAcceleration() { return externalAcceleration_; }
+  // models::AirCoupling: the grown branch particles, and the external acceleration.
+  models::AirBodies airBodies() const override;
+  std::vector<Vec3>& airAcceleration() override { return externalAcceleration_; }
+  float airTimeStep() const override { return settings_.dt; }
 
   // --- interaction (§5.1) ---
   // Pulls a particle toward `target` through a soft constraint of the given strength (0–1).
@@ -125,6 +133,13 @@ class ParticleWorld {
   float radius(uint32_t i) const { return b_[i]; }
   float mass(uint32_t i) const { return m_[i]; }
   float age(uint32_t i) const { return age_[i]; }
+  // The same per particle slot, as whole arrays (capacity() entries each).
+  std::span<const Vec3> positions() const { return x_; }
+  std::span<const Vec3> velocities() const { return v_; }
+  std::span<const Quat> orientations() const { return q_; }
+  std::span<const float> halfLengths() const { return a_; }
+  std::span<const float> radii() const { return b_; }
+  std::span<const float> masses() const { return m_; }
   // Strain of the connection to the parent: |d − d̄| / d̄ (0 for roots).
   float strain(uint32_t i) const;
   // The particle's tip ("head"): where its successor attaches.
@@ -182,8 +197,17 @@ class ParticleWorld {
 
   // phases (dynamics.cpp, growth.cpp, collisions.cpp)
   void grow(const env::Environment& env);
+  struct ApexUpdate;  // what an apex decided (growth.cpp)
+  void decideApex(uint32_t i, const env::Environment& env, ApexUpdate& u) const;
+  void applyApex(uint32_t i, const ApexUpdate& u, const env::Environment& env);
+  void growLeaves();
+  void attachLeavesOfLargePlants();
+  void thicken();  // secondary growth
   void predict();
   void shapeMatch();
+  void gatherMatchRest();          // shapeMatch()'s fixed part of a step
+  void matchOne(uint32_t k);       // one particle's fit (piece order k)
+  void matchFour(uint32_t k);      // the same for k … k + 3, one per SIMD lane
   void applyAnchors(const env::Environment& env);
   void collideObstacles(const env::Environment& env);
   void collideParticles();
@@ -292,6 +316,7 @@ class ParticleWorld {
   std::vector<uint32_t> hashFill_;
   std::vector<HashPacked> hashPacked_;
   std::vector<float> nextRadius_;  // scratch of grow()'s secondary growth (not saved)
+  mutable std::vector<uint32_t> airIds_;  // airBodies()' list, rebuilt by each call (not saved)
 
   // Interaction.
   uint32_t dragParticle_ = kNone;

@@ -1,3 +1,4 @@
+#include "tendril/scene/model_types.h"
 #include "tendril/scene/scene.h"
 
 #include "tendril/core/error.h"
@@ -178,15 +179,15 @@ env::Stroke readStroke(JsonObject& o) {
   return s;
 }
 
-PlantSpec readPlant(JsonObject& o, const std::filesystem::path& baseDir, size_t index) {
-  PlantSpec p;
+models::PlantSpec readPlant(JsonObject& o, const std::filesystem::path& baseDir, size_t index) {
+  models::PlantSpec p;
   p.pointer = o.pointer();
   p.name = o.string("name", fmt::format("plant{}", index));
   p.model = o.string("model", "climb");
-  const models::ModelType* model = models::findModelType(p.model);
+  const models::ModelType* model = scene::findModelType(p.model);
   if (!model) {
     std::string names;
-    for (const models::ModelType& t : models::modelTypes()) names += (names.empty() ? "\"" : ", \"") + t.name + "\"";
+    for (const models::ModelType& t : scene::modelTypes()) names += (names.empty() ? "\"" : ", \"") + t.name + "\"";
     throw o.error("model", fmt::format("must be one of {}, got \"{}\"", names, p.model));
   }
   if (!o.has("position")) throw o.error("position", "is required (the seed point, [x, y, z] in m)");
@@ -263,7 +264,7 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
   return scene;
 }
 
-PlantSpec parsePlant(const Json& plant, const std::string& source, const std::string& pointer,
+models::PlantSpec parsePlant(const Json& plant, const std::string& source, const std::string& pointer,
                      const std::filesystem::path& baseDir, size_t index) {
   if (!plant.is_object()) throw Error(source, pointer, "expected a plant object, got " + describeJson(plant));
   JsonObject o(plant, source, pointer);

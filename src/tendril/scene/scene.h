@@ -6,7 +6,7 @@
 
 #include "tendril/core/json_reader.h"
 #include "tendril/env/environment.h"
-#include "tendril/scene/plant_spec.h"
+#include "tendril/models/plant_spec.h"
 #include "tendril/wind/sph.h"
 
 #include <filesystem>
@@ -42,7 +42,7 @@ struct Scene {
   // moving at wind.velocity (else only the emitters bring air).
   wind::SphSettings sph;
   bool sphFill = true;
-  std::vector<PlantSpec> plants;
+  std::vector<models::PlantSpec> plants;
   OutputSettings output;
 };
 
@@ -53,7 +53,7 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
 
 // Parses one plant object of a scene (the "plants" entries); `pointer` is its JSON pointer and
 // `index` its place (default name "plant<index>", default seed index + 1).
-PlantSpec parsePlant(const Json& plant, const std::string& source, const std::string& pointer,
+models::PlantSpec parsePlant(const Json& plant, const std::string& source, const std::string& pointer,
                      const std::filesystem::path& baseDir, size_t index);
 
 // Fills an environment with the scene's obstacles, lights, strokes and wind, and commits it.

@@ -1,8 +1,8 @@
+#include "tendril/scene/model_types.h"
 #include "tendril/session/edit.h"
 
 #include "tendril/core/error.h"
 #include "tendril/models/registry.h"
-#include "tendril/particles/world.h"
 #include "tendril/session/session.h"
 
 #include <fmt/format.h>
@@ -125,21 +125,16 @@ void requirePlant(const Session& s, uint32_t plant, const char* what) {
     throw Error(what, "/plant", fmt::format("there is no plant {} (the session has {})", plant, s.plantCount()));
 }
 
-// The particle world and the plant's index in it; Error when the plant is not a particle plant.
-particles::ParticleWorld& particlePlant(Session& s, uint32_t plant, const char* what, uint32_t* worldPlant) {
+// The plant's system's capability `C` (e.g. &models::PlantSystem::grip); Error naming the
+// edit when the plant's model does not have it.
+template <class C>
+C& capability(Session& s, uint32_t plant, C* (models::PlantSystem::*get)(), const char* what) {
   requirePlant(s, plant, what);
-  if (s.plantSpec(plant).model != "particles")
+  C* c = (s.system(plant).*get)();
+  if (!c)
     throw Error(what, "/plant",
-                fmt::format("plant {} is of model \"{}\"; only particle plants can do this", plant,
-                            s.plantSpec(plant).model));
-  *worldPlant = uint32_t(s.indexInSystem(plant));
-  return *s.particleWorld();
-}
-
-void requireParticle(const particles::ParticleWorld& w, uint32_t worldPlant, uint32_t particle, const char* what) {
-  if (particle >= w.capacity() || !w.active(particle) || w.plantOf(particle) != worldPlant ||
-      (w.flags(particle) & particles::kDetached))
-    throw Error(what, "/particle", fmt::format("particle {} is not part of the plant", particle));
+                fmt::format("plant {} is of model \"{}\", which cannot do this", plant, s.plantSpec(plant).model));
+  return *c;
 }
 
 void requireFinite(const Vec3& v, const char* what, const char* key) {
@@ -171,33 +166,7 @@ std::string plantKeyFor(const std::string& model) {
   return "species";
 }
 
-// A stroke near a full-grown branch particle seeds a branch there, toward the stroke (seed 000
-// §5.1: "the user paints ... new branches sprout"): the closest such particle within the
-// stroke's radius of any of its points.
-void seedBranchNearStroke(Session& s, const env::Stroke& stroke) {
-  particles::ParticleWorld* w = s.particleWorld();
-  if (!w || !stroke.attract) return;
-  uint32_t best = particles::kNone;
-  float bestDistance = stroke.radius;
-  Vec3 toward = Vec3::Zero();
-  for (uint32_t i = 0; i < w->capacity(); ++i) {
-    const uint32_t f = w->flags(i);
-    if (!(f & particles::kActive) || !(f & particles::kGrown) ||
-        (f & (particles::kLeaf | particles::kDetached | particles::kRoot)))
-      continue;
-    for (const Vec3& p : stroke.points) {
-      const float d = (p - w->head(i)).norm();
-      if (d < bestDistance) {
-        bestDistance = d;
-        best = i;
-        toward = p - w->head(i);
-      }
-    }
-  }
-  if (best != particles::kNone) w->seedBranch(best, toward);
-}
-
-void applyTo(Session& s, const Edit& edit, Editor& editor, uint32_t& dragParticle, float& dragStrength) {
+void applyTo(Session& s, const Edit& edit, Editor& editor, Editor::Drag& drag) {
   env::Environment& env = s.environment();
   std::visit(
       Overloaded{
@@ -222,14 +191,9 @@ void applyTo(Session& s, const Edit& edit, Editor& editor, uint32_t& dragParticl
             s.addPlant(plant, "seed_plant");
           },
           [&](const SeedBranch& e) {
-            uint32_t wp = 0;
-            particles::ParticleWorld& w = particlePlant(s, e.plant, "seed_branch", &wp);
-            requireParticle(w, wp, e.particle, "seed_branch");
+            models::BranchSeeding& b = capability(s, e.plant, &models::PlantSystem::branchSeeding, "seed_branch");
             requireFinite(e.direction, "seed_branch", "direction");
-            if (w.flags(e.particle) & particles::kLeaf)
-              throw Error("seed_branch", "/particle", fmt::format("particle {} is a leaf", e.particle));
-            if (w.seedBranch(e.particle, e.direction) == particles::kNone)
-              throw Error("seed_branch", "/particle", fmt::format("particle {} cannot carry a branch", e.particle));
+            b.seedBranch(s.indexInSystem(e.plant), e.particle, e.direction, "seed_branch");
           },
           [&](const Cut& e) {
             requirePlant(s, e.plant, "cut");
@@ -242,26 +206,25 @@ void applyTo(Session& s, const Edit& edit, Editor& editor, uint32_t& dragParticl
           },
           [&](const DragBegin& e) {
             if (editor.dragging()) throw Error("drag_begin", "", "a drag is already under way (end it with drag_end)");
-            uint32_t wp = 0;
-            particles::ParticleWorld& w = particlePlant(s, e.plant, "drag_begin", &wp);
-            requireParticle(w, wp, e.particle, "drag_begin");
+            models::Grip& g = capability(s, e.plant, &models::PlantSystem::grip, "drag_begin");
+            g.requireHandle(s.indexInSystem(e.plant), e.particle, "drag_begin");
             requireFinite(e.target, "drag_begin", "target");
             if (!(e.strength >= 0.0f && e.strength <= 1.0f))
               throw Error("drag_begin", "/strength", fmt::format("must be in [0, 1], got {}", e.strength));
-            w.setDrag(e.particle, e.target, e.strength);
-            dragParticle = e.particle;
-            dragStrength = e.strength;
+            g.setDrag(e.particle, e.target, e.strength);
+            drag.plant = e.plant, drag.handle = e.particle, drag.strength = e.strength;
           },
           [&](const DragMove& e) {
             if (!editor.dragging()) throw Error("drag_move", "", "no drag is under way (start one with drag_begin)");
             requireFinite(e.target, "drag_move", "target");
-            // The grip is lost when the dragged particle broke off and went.
-            particles::ParticleWorld* w = s.particleWorld();
-            if (w) w->setDrag(dragParticle, e.target, dragStrength);
+            // The grip is lost when the dragged part broke off and went.
+            if (drag.plant < s.plantCount())
+              if (models::Grip* g = s.system(drag.plant).grip()) g->setDrag(drag.handle, e.target, drag.strength);
           },
           [&](const DragEnd&) {
             if (!editor.dragging()) throw Error("drag_end", "", "no drag is under way");
-            if (particles::ParticleWorld* w = s.particleWorld()) w->clearDrag();
+            if (drag.plant < s.plantCount())
+              if (models::Grip* g = s.system(drag.plant).grip()) g->clearDrag();
           },
           [&](const PaintStroke& e) {
             const env::Stroke& st = e.stroke;
@@ -273,7 +236,10 @@ void applyTo(Session& s, const Edit& edit, Editor& editor, uint32_t& dragParticl
               throw Error("paint_stroke", "/strength", "must be a finite number >= 0");
             env.addStroke(st);
             s.environmentChanged();
-            seedBranchNearStroke(s, st);
+            // An attracting stroke near a full-grown branch seeds a branch there, toward the
+            // stroke (seed 000 §5.1), in every model that can.
+            for (models::PlantSystem* system : s.systems())
+              if (models::BranchSeeding* b = system->branchSeeding()) b->seedBranchNear(st);
           },
           [&](const MoveObstacle& e) {
             if (e.obstacle >= env.obstacleCount())
@@ -487,9 +453,9 @@ Edit readEdit(JsonObject& o) {
   if (kind == "seed_plant") {
     SeedPlant e;
     e.model = o.string("model", e.model);
-    if (!models::findModelType(e.model)) {
+    if (!scene::findModelType(e.model)) {
       std::string names;
-      for (const models::ModelType& t : models::modelTypes()) names += (names.empty() ? "\"" : ", \"") + t.name + "\"";
+      for (const models::ModelType& t : scene::modelTypes()) names += (names.empty() ? "\"" : ", \"") + t.name + "\"";
       throw o.error("model", fmt::format("must be one of {}, got \"{}\"", names, e.model));
     }
     e.species = o.string("species", "");
@@ -615,8 +581,7 @@ Edit readEdit(JsonObject& o) {
 struct Editor::Snapshot {
   std::vector<uint8_t> state;
   bool dragging = false;
-  uint32_t dragParticle = kNoParticle;
-  float dragStrength = 0.0f;
+  Drag drag;
 };
 
 Editor::Editor(Session& session, size_t historyBytes) : session_(session), historyBytesCap_(historyBytes) {}
@@ -670,10 +635,10 @@ void Editor::record(uint32_t at, const Edit& edit) {
 
 void Editor::undo() {
   if (undo_.empty()) throw Error("undo", "", "there is nothing to undo");
-  Snapshot now{session_.saveState(), dragging_, dragParticle_, dragStrength_};
+  Snapshot now{session_.saveState(), dragging_, drag_};
   Snapshot& before = undo_.back();
   session_.loadState(before.state, "undo history");
-  dragging_ = before.dragging, dragParticle_ = before.dragParticle, dragStrength_ = before.dragStrength;
+  dragging_ = before.dragging, drag_ = before.drag;
   undo_.pop_back();
   redo_.push_back(std::move(now));
   trim();
@@ -681,10 +646,10 @@ void Editor::undo() {
 
 void Editor::redo() {
   if (redo_.empty()) throw Error("redo", "", "there is nothing to redo");
-  Snapshot now{session_.saveState(), dragging_, dragParticle_, dragStrength_};
+  Snapshot now{session_.saveState(), dragging_, drag_};
   Snapshot& after = redo_.back();
   session_.loadState(after.state, "undo history");
-  dragging_ = after.dragging, dragParticle_ = after.dragParticle, dragStrength_ = after.dragStrength;
+  dragging_ = after.dragging, drag_ = after.drag;
   redo_.pop_back();
   undo_.push_back(std::move(now));
   trim();
@@ -695,14 +660,14 @@ void Editor::step(uint32_t count) { apply(Step{count}); }
 void Editor::apply(const Edit& edit) {
   const uint32_t at = stepsRun_;
   if (std::holds_alternative<Undo>(edit) || std::holds_alternative<Redo>(edit)) {
-    applyTo(session_, edit, *this, dragParticle_, dragStrength_);
+    applyTo(session_, edit, *this, drag_);
     record(at, edit);
     return;
   }
   if (const Step* s = std::get_if<Step>(&edit)) {
     // Steps are not undo entries of their own; they change the state a redo would restore
     // onto, so the redo steps go.
-    applyTo(session_, edit, *this, dragParticle_, dragStrength_);
+    applyTo(session_, edit, *this, drag_);
     stepsRun_ += s->count;
     if (s->count > 0) redo_.clear();
     record(at, edit);
@@ -710,12 +675,12 @@ void Editor::apply(const Edit& edit) {
   }
   // A drag gesture is one undo entry: the one made by drag_begin.
   const bool gesture = std::holds_alternative<DragMove>(edit) || std::holds_alternative<DragEnd>(edit);
-  Snapshot before{session_.saveState(), dragging_, dragParticle_, dragStrength_};
+  Snapshot before{session_.saveState(), dragging_, drag_};
   try {
-    applyTo(session_, edit, *this, dragParticle_, dragStrength_);
+    applyTo(session_, edit, *this, drag_);
   } catch (const Error&) {
     session_.loadState(before.state, "undo history");
-    dragging_ = before.dragging, dragParticle_ = before.dragParticle, dragStrength_ = before.dragStrength;
+    dragging_ = before.dragging, drag_ = before.drag;
     throw;
   }
   if (std::holds_alternative<DragBegin>(edit)) dragging_ = true;
@@ -775,11 +740,11 @@ std::optional<NodePick> pickNode(const Session& session, const Vec3& origin, con
       best = NodePick{uint32_t(pi), uint32_t(n), kNoParticle, point, t};
     }
   }
-  if (best && session.plantSpec(best->plant).model == "particles") {
-    const std::vector<uint32_t> ids =
-        session.particleWorld()->snapshotParticles(uint32_t(session.indexInSystem(best->plant)));
-    if (best->node < ids.size()) best->particle = ids[best->node];
-  }
+  if (best)
+    if (const models::Grip* g = session.system(best->plant).grip()) {
+      const std::vector<uint32_t> ids = g->nodeHandles(session.indexInSystem(best->plant));
+      if (best->node < ids.size()) best->particle = ids[best->node];
+    }
   return best;
 }
 

@@ -32,7 +32,7 @@ inline constexpr uint32_t kNoParticle = std::numeric_limits<uint32_t>::max();
 
 // A new plant of any model standing at a surface point, growing along the surface normal.
 struct SeedPlant {
-  std::string model = "particles";  // a name in models::modelTypes()
+  std::string model = "particles";  // a name in scene::modelTypes()
   // climb, particles: species preset name or .json path; lsystem: grammar name or .ls path;
   // graph: graph .json path. Empty = the model's default (climb, particles). Relative paths
   // are resolved against the scene's directory.
@@ -205,6 +205,14 @@ class Editor {
   size_t historyBytes() const;  // memory held by snapshots
 
   bool dragging() const { return dragging_; }
+  // The drag gesture under way: the plant, the part held (models::Grip) and the strength, which
+  // drag_move keeps.
+  struct Drag {
+    uint32_t plant = 0;
+    uint32_t handle = kNoParticle;
+    float strength = 0.0f;
+  };
+  const Drag& drag() const { return drag_; }
 
   // Steps run through this editor (step() and Step edits): the clock of the journal. Unlike
   // Session::stepCount() it never goes back (an undo rewinds the session's steps, not this).
@@ -229,8 +237,7 @@ class Editor {
   std::vector<TimedEdit> journal_;
   uint32_t stepsRun_ = 0;
   bool dragging_ = false;
-  uint32_t dragParticle_ = kNoParticle;  // the gesture's particle and strength (drag_move)
-  float dragStrength_ = 0.0f;
+  Drag drag_;
 };
 
 // --- picking ---
@@ -238,7 +245,7 @@ class Editor {
 struct NodePick {
   uint32_t plant = 0;
   uint32_t node = 0;                 // node index in the plant's snapshot
-  uint32_t particle = kNoParticle;   // particle id, for particle plants
+  uint32_t particle = kNoParticle;   // the part's handle, for models that can be held (models::Grip)
   Vec3 point = Vec3::Zero();         // closest point on the segment's axis to the ray
   float t = 0.0f;                    // distance along the ray (m)
 };

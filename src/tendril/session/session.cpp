@@ -1,12 +1,14 @@
+#include "tendril/scene/model_types.h"
 #include "tendril/session/session.h"
 
 #include "tendril/core/archive.h"
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
 #include "tendril/env/mesh_import.h"
-#include "tendril/particles/particle_model.h"
 
 #include <fmt/format.h>
+
+#include <utility>
 
 namespace tendril::session {
 
@@ -87,7 +89,7 @@ Session::Session(scene::Scene scene, Json sceneDocument, std::filesystem::path b
   const Json* plants = sceneDocument_.is_object() && sceneDocument_.contains("plants") ? &sceneDocument_["plants"]
                                                                                         : nullptr;
   for (size_t i = 0; i < scene_.plants.size(); ++i) {
-    const scene::PlantSpec& p = scene_.plants[i];
+    const models::PlantSpec& p = scene_.plants[i];
     size_t s = systemFor(p.model);
     if (s == systems_.size()) throw Error(scene_.source, p.pointer + "/model", fmt::format("unknown model \"{}\"", p.model));
     try {
@@ -105,7 +107,7 @@ Session::Session(scene::Scene scene, Json sceneDocument, std::filesystem::path b
   if (scene_.wind.mode == env::WindMode::Sph) {
     wind::SphSettings settings = scene_.sph;
     for (const auto& s : systems_)
-      if (auto* p = dynamic_cast<const particles::ParticlePlantSystem*>(s.get())) settings.dt = p->world().settings().dt;
+      if (const models::AirCoupling* a = std::as_const(*s).airCoupling()) settings.dt = a->airTimeStep();
     // What the air refuses is named in the scene: its settings' keys under /environment/wind/sph,
     // an emitter's under /environment/wind/emitters/i.
     const std::string wind = "/environment/wind";
@@ -145,7 +147,7 @@ Session::~Session() = default;
 size_t Session::systemFor(const std::string& model) {
   for (size_t s = 0; s < systemModels_.size(); ++s)
     if (systemModels_[s] == model) return s;
-  const models::ModelType* type = models::findModelType(model);
+  const models::ModelType* type = scene::findModelType(model);
   if (!type) return systems_.size();
   systems_.push_back(type->createSystem(models::SystemContext{scene_.seed, scene_.stepTime}));
   systemModels_.push_back(model);
@@ -154,8 +156,12 @@ size_t Session::systemFor(const std::string& model) {
 
 void Session::step() {
   if (air_) {
-    // The air and the particle plants act on each other (two-way coupling), then the plants step.
-    air_->step(*env_, particleWorld());
+    // The air and the plants that take the air's push act on each other (two-way coupling),
+    // then the plants step.
+    std::vector<models::AirCoupling*> coupled;
+    for (auto& s : systems_)
+      if (models::AirCoupling* a = s->airCoupling()) coupled.push_back(a);
+    air_->step(*env_, std::span<models::AirCoupling* const>(coupled));
     airSeconds_ += air_->timings().total;
     ++airSteps_;
   }
@@ -186,8 +192,8 @@ std::vector<plant::PlantModel> Session::plants() const {
   return out;
 }
 
-std::vector<wind::GrowthFlowSpecies> Session::growthFlow() const {
-  std::vector<wind::GrowthFlowSpecies> out;
+std::vector<plant::GrowthFlowSpecies> Session::growthFlow() const {
+  std::vector<plant::GrowthFlowSpecies> out;
   out.reserve(plants_.size());
   for (const PlantRef& r : plants_) out.push_back(systems_[r.system]->growthFlow(r.index));
   return out;
@@ -199,19 +205,20 @@ size_t Session::segmentCount() const {
   return n;
 }
 
-particles::ParticleWorld* Session::particleWorld() {
-  for (auto& s : systems_)
-    if (auto* p = dynamic_cast<particles::ParticlePlantSystem*>(s.get())) return &p->world();
-  return nullptr;
+std::vector<models::PlantSystem*> Session::systems() {
+  std::vector<models::PlantSystem*> out;
+  for (const auto& s : systems_) out.push_back(s.get());
+  return out;
 }
 
-const particles::ParticleWorld* Session::particleWorld() const {
+size_t Session::airBodyCount() const {
+  size_t n = 0;
   for (const auto& s : systems_)
-    if (auto* p = dynamic_cast<const particles::ParticlePlantSystem*>(s.get())) return &p->world();
-  return nullptr;
+    if (const models::AirCoupling* a = std::as_const(*s).airCoupling()) n += a->airBodies().ids.size();
+  return n;
 }
 
-uint32_t Session::addPlant(scene::PlantSpec spec, Json description) {
+uint32_t Session::addPlant(models::PlantSpec spec, Json description) {
   for (const SpecEntry& e : specs_)
     if (&e - specs_.data() < std::ptrdiff_t(plants_.size()) && e.spec.name == spec.name)
       throw Error("", "/name", fmt::format("plant name \"{}\" is used twice", spec.name));
@@ -236,7 +243,7 @@ uint32_t Session::addPlant(scene::PlantSpec spec, Json description) {
 }
 
 uint32_t Session::addPlant(const Json& plant, const std::string& source) {
-  scene::PlantSpec spec = scene::parsePlant(plant, source, "", baseDir_, plants_.size());
+  models::PlantSpec spec = scene::parsePlant(plant, source, "", baseDir_, plants_.size());
   try {
     return addPlant(std::move(spec), plant);
   } catch (const Error& e) {
@@ -247,7 +254,7 @@ uint32_t Session::addPlant(const Json& plant, const std::string& source) {
 
 void Session::setPlantDescription(size_t plant, const Json& description, const std::string& source) {
   if (plant >= plants_.size()) throw Error(source, "", fmt::format("there is no plant {}", plant));
-  scene::PlantSpec spec = scene::parsePlant(description, source, "", baseDir_, plant);
+  models::PlantSpec spec = scene::parsePlant(description, source, "", baseDir_, plant);
   SpecEntry& entry = specs_[plant];
   if (spec.model != entry.spec.model)
     throw Error(source, "/model", fmt::format("plant {} is of model \"{}\", not \"{}\"", plant, entry.spec.model, spec.model));
@@ -434,7 +441,7 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
     } catch (const Error& e) {
       in.fail(at, fmt::format("plant {}: {}", i, e.message()));
     }
-    scene::PlantSpec spec = scene::parsePlant(description, source, fmt::format("/plants/{}", i), baseDir_, i);
+    models::PlantSpec spec = scene::parsePlant(description, source, fmt::format("/plants/{}", i), baseDir_, i);
     if (spec.model != model) in.fail(at, fmt::format("plant {} is of model \"{}\", not \"{}\"", i, spec.model, model));
     specs.push_back({std::move(spec), std::move(description), std::move(text)});
   }
@@ -513,7 +520,7 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
     size_t s = 0;
     while (s < systemModels.size() && systemModels[s] != e.spec.model) ++s;
     if (s == systems.size()) {
-      const models::ModelType* type = models::findModelType(e.spec.model);
+      const models::ModelType* type = scene::findModelType(e.spec.model);
       if (!type) in.fail(fmt::format("unknown model \"{}\"", e.spec.model));
       systems.push_back(type->createSystem(models::SystemContext{scene_.seed, scene_.stepTime}));
       systemModels.push_back(e.spec.model);

@@ -18,10 +18,6 @@
 #include <string>
 #include <vector>
 
-namespace tendril::particles {
-class ParticleWorld;
-}
-
 namespace tendril::session {
 
 class Session {
@@ -53,19 +49,19 @@ class Session {
   // Snapshots of every plant, in scene order.
   std::vector<plant::PlantModel> plants() const;
   // The Growth-Flow constants of every plant, in scene order.
-  std::vector<wind::GrowthFlowSpecies> growthFlow() const;
+  std::vector<plant::GrowthFlowSpecies> growthFlow() const;
   size_t segmentCount() const;
 
   // --- plants at run time ---
   // Adds a plant now (any model). `description` is the plant as a scene-file plant object;
   // plants added without one cannot be written to a session file. Throws Error for a seed
   // inside an obstacle and other bad settings. Returns the plant's index.
-  uint32_t addPlant(scene::PlantSpec spec, Json description = {});
+  uint32_t addPlant(models::PlantSpec spec, Json description = {});
   // Adds a plant from a scene-file plant object (docs/scene-format.md); errors name `source`
   // and the object's keys.
   uint32_t addPlant(const Json& plant, const std::string& source);
   size_t plantCount() const { return plants_.size(); }
-  const scene::PlantSpec& plantSpec(size_t plant) const { return specs_.at(plant).spec; }
+  const models::PlantSpec& plantSpec(size_t plant) const { return specs_.at(plant).spec; }
   // The plant's scene-file object (null for plants added from code).
   const Json& plantDescription(size_t plant) const { return specs_.at(plant).description; }
   // Replaces a plant's settings live from a new scene-file plant object of the same model
@@ -75,9 +71,11 @@ class Session {
   models::PlantSystem& system(size_t plant) { return *systems_[plants_.at(plant).system]; }
   const models::PlantSystem& system(size_t plant) const { return *systems_[plants_.at(plant).system]; }
   size_t indexInSystem(size_t plant) const { return plants_.at(plant).index; }
-  // The particle world of the particle plants (null when the session has none).
-  particles::ParticleWorld* particleWorld();
-  const particles::ParticleWorld* particleWorld() const;
+  // One system per model in use, in the order the models were first used.
+  std::vector<models::PlantSystem*> systems();
+  // The bodies the simulated air may push, over every system that takes part in it
+  // (models::AirCoupling; for particle plants, their grown branch particles).
+  size_t airBodyCount() const;
   // The simulated air (wind mode sph), or null.
   wind::SphAir* air() { return air_.get(); }
   const wind::SphAir* air() const { return air_.get(); }
@@ -135,7 +133,7 @@ class Session {
   };
 
   struct SpecEntry {
-    scene::PlantSpec spec;
+    models::PlantSpec spec;
     Json description;
     std::string text;  // description.dump(), compared on loadState
   };

@@ -3,7 +3,7 @@
 #include "tendril/core/parallel.h"
 #include "tendril/core/random.h"
 #include "tendril/mesh/leaf_mesh.h"
-#include "tendril/particles/match_lanes.h"
+#include "tendril/core/match_lanes.h"
 
 #include <algorithm>
 #include <atomic>
@@ -20,8 +20,8 @@ constexpr uint64_t kLeafPurpose = purposeId("wind.leaf-motion");
 // Four nodes per pass of the drag (false: one at a time, for the tests).
 std::atomic<bool> gLanes{true};
 
-inline particles::lanes::F4 load(const float* p) {
-  particles::lanes::F4 v;
+inline lanes::F4 load(const float* p) {
+  lanes::F4 v;
   std::memcpy(&v, p, sizeof v);
   return v;
 }
@@ -58,13 +58,13 @@ inline Quat renormalized(const Quat& q) {
 // A leaf's posed rotation: its rest rotation · R_Y(ψ) · R_X(θ + φ), the last product written
 // out for the two axes. `rest` is of unit length, so the product is too (to float round-off,
 // as a normalised one).
-inline Quat posedLeafRotation(const Quat& rest, const LeafMotionState& L) {
+inline Quat posedLeafRotation(const Quat& rest, const plant::LeafMotionState& L) {
   const Quat y = swayRotation(L.twist, Vec3::UnitY());
   const Quat x = swayRotation(L.petioleBend + L.vibrate, Vec3::UnitX());
   return rest * Quat(y.w() * x.w(), y.w() * x.x(), y.y() * x.w(), -(y.y() * x.x()));
 }
 
-inline Vec3 leafMotionOf(const LeafMotionState& L) { return Vec3(L.bladeBend, L.twist, L.vibrate); }
+inline Vec3 leafMotionOf(const plant::LeafMotionState& L) { return Vec3(L.bladeBend, L.twist, L.vibrate); }
 
 bool heldBySupport(uint32_t flags) {
   return (flags & (plant::kNodeClimbing | plant::kNodeAnchored)) != 0;
@@ -76,7 +76,7 @@ namespace detail {
 void setDragLanes(bool on) { gLanes.store(on, std::memory_order_relaxed); }
 }  // namespace detail
 
-WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& species, MotionSettings settings)
+WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpecies& species, MotionSettings settings)
     : rest_(rest), species_(species), settings_(settings) {
   const size_t n = rest_.nodeCount();
   nodes_.resize(n);
@@ -94,7 +94,7 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& s
 
   // Leaf areas and the leaves' share of each node's drag and mass.
   const size_t m = rest_.leafCount();
-  leaves_.assign(m, LeafMotionState{});
+  leaves_.assign(m, plant::LeafMotionState{});
   std::vector<float> mass(n);
   for (size_t i = 0; i < n; ++i) {
     float r = rest_.radius[i], l = rest_.length[i];
@@ -304,7 +304,7 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
   const size_t blocks = gLanes.load(std::memory_order_relaxed) ? n / 4 : 0;
   const bool tabled = !uniform && !simulated && !loop && ws.emitters.empty() && gusts_.tabled();
   parallelFor(size_t(0), blocks, [&](size_t b) {
-    using namespace particles::lanes;
+    using namespace lanes;
     const size_t i = 4 * b;
     alignas(16) float x[4], y[4], z[4];
     if (tabled) {
@@ -456,9 +456,9 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   std::atomic<bool> tore{false};
   const uint32_t frame = frame_;
   const float gustMin = settings_.gustMin;
-  const GrowthFlowSpecies& species = species_;
+  const plant::GrowthFlowSpecies& species = species_;
   // Plain pointers, as in compose().
-  LeafMotionState* const leaves = leaves_.data();
+  plant::LeafMotionState* const leaves = leaves_.data();
   const uint64_t* const keys = leafKey_.data();
   const uint32_t* const leafNode = leafNode_.data();
   const Quat* const restRotation = leafRest_.data();
@@ -467,12 +467,12 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   Quat* const rotation = posed.leafRotation.data();
   Vec3* const motion = posed.leafMotion.data();
   parallelFor(size_t(0), m, [=, &tore](size_t j) {
-    LeafMotionState& L = leaves[j];
+    plant::LeafMotionState& L = leaves[j];
     if (L.detached) return;
     Rng rng(mix64(keys[j] ^ (uint64_t(frame) * 0x9e3779b97f4a7c15ull)));
     int type = int(rng.below(3));
     float gust = gustMin + (1.0f - gustMin) * rng.uniform();
-    updateLeafMotion(L, type, speed[size_t(leafNode[j])], gust, dt, species);
+    plant::updateLeafMotion(L, type, speed[size_t(leafNode[j])], gust, dt, species);
     if (L.detached) {
       tore.store(true, std::memory_order_relaxed);
     } else if (inPlace) {

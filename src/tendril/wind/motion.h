@@ -28,9 +28,9 @@
 #pragma once
 
 #include "tendril/env/wind_field.h"
-#include "tendril/particles/match_lanes.h"
+#include "tendril/core/match_lanes.h"
 #include "tendril/plant/plant_model.h"
-#include "tendril/wind/growth_flow.h"
+#include "tendril/plant/growth_flow.h"
 
 #include <cstdint>
 #include <vector>
@@ -48,7 +48,7 @@ struct MotionSettings {
 
 class WindMotion {
  public:
-  WindMotion(const plant::PlantModel& rest, const GrowthFlowSpecies& species, MotionSettings settings = {});
+  WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpecies& species, MotionSettings settings = {});
 
   // Advances one frame to time t (s) with frame length dt and writes the posed plant (the rest
   // plant with swayed nodes and moved leaves; detached leaves left out). Pass the same `posed`
@@ -58,7 +58,7 @@ class WindMotion {
 
   // Node i's sway angle in the last step (rad).
   float swayAngle(size_t i) const { return angle_[internal_[i]]; }
-  const std::vector<LeafMotionState>& leaves() const { return leaves_; }
+  const std::vector<plant::LeafMotionState>& leaves() const { return leaves_; }
   uint32_t frame() const { return frame_; }
   const plant::PlantModel& rest() const { return rest_; }
   // Posed rigid transform of node i's subtree in the last step: x ↦ rotation·x + translation.
@@ -90,7 +90,7 @@ class WindMotion {
   void compose(float t, plant::PlantModel& posed);
 
   plant::PlantModel rest_;
-  GrowthFlowSpecies species_;
+  plant::GrowthFlowSpecies species_;
   MotionSettings settings_;
   uint32_t frame_ = 0;
 
@@ -107,9 +107,9 @@ class WindMotion {
   // node to the centre of gravity, the projected areas of the segment (2 r l) and of its
   // leaves, and whether the node may sway (not held by a support: all bits set).
   struct DragBlock {
-    particles::lanes::V3 direction, lever;
-    particles::lanes::F4 stemArea, leafArea;
-    particles::lanes::M4 free;
+    lanes::V3 direction, lever;
+    lanes::F4 stemArea, leafArea;
+    lanes::M4 free;
   };
   std::vector<DragBlock> dragBlocks_;
   // Per node, per step (torques only when the wind is not uniform or changed).
@@ -135,7 +135,7 @@ class WindMotion {
   std::vector<uint32_t> mergeNodes_;  // top nodes and task roots (internal), by plant index
   std::vector<uint32_t> taskStart_;   // task k: internal nodes topCount_ + [taskStart_[k], taskStart_[k + 1])
   // Per leaf.
-  std::vector<LeafMotionState> leaves_;
+  std::vector<plant::LeafMotionState> leaves_;
   std::vector<Quat> leafRest_;     // rest rotation, normalised
   std::vector<uint32_t> leafNode_; // the (internal) node the leaf hangs on
   std::vector<uint64_t> leafKey_;  // random key of the leaf's motion; each frame mixes in its number

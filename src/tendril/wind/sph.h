@@ -1,16 +1,16 @@
-// Air as SPH particles, coupled both ways with the oriented-particle plants (seed 000 §5.3).
+// Air as SPH particles, coupled both ways with plants (seed 000 §5.3).
 //
 // Weakly compressible SPH after Müller, Charypar & Gross 2003 ("Particle-based fluid
 // simulation for interactive applications", MCG03): density by the poly6 kernel, pressure
 // p = c²(ρ − ρ0) with the spiky kernel's gradient, viscosity with the viscosity kernel's
 // Laplacian (seed 000 eq. 11–12). Or (SphSolver::PositionBased) the pressure as the
 // multiplier of the density constraint ρ = ρ0, solved by position projections (Macklin &
-// Müller 2013, "Position Based Fluids"), in a third of the substeps. Grown branch particles
-// of a ParticleWorld take part through an anisotropic kernel W(G(x − x_j)) whose tensor G
-// comes from the particle's ellipsoid (eq. 13, after Owen et al. 1997): they add to the air's
-// density and push it by pressure like boundary particles, and they drag the air with a
-// stem's cross-flow drag; the equal and opposite force becomes the plant particle's external
-// acceleration a_e in eq. 1.
+// Müller 2013, "Position Based Fluids"), in a third of the substeps. Plants' bodies — the
+// grown branch particles of a ParticleWorld, or any system's through models::AirCoupling —
+// take part through an anisotropic kernel W(G(x − x_j)) whose tensor G comes from the body's
+// ellipsoid (eq. 13, after Owen et al. 1997): they add to the air's density and push it by
+// pressure like boundary particles, and they drag the air with a stem's cross-flow drag; the
+// equal and opposite force becomes the body's external acceleration (a_e in eq. 1).
 // Obstacles come from the Environment's signed distances; each face of the domain box is
 // either closed (a wall) or open (particles leaving through it are removed).
 //
@@ -22,18 +22,17 @@
 #include "tendril/core/archive.h"
 #include "tendril/core/math.h"
 #include "tendril/env/wind_field.h"
+#include "tendril/models/capabilities.h"
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace tendril::env {
 class Environment;
-}
-namespace tendril::particles {
-class ParticleWorld;
 }
 
 namespace tendril::wind {
@@ -136,12 +135,14 @@ class SphAir final : public env::AirFlow {
   size_t fillBox(const Vec3& min, const Vec3& max, const env::Environment& env,
                  const Vec3& velocity = Vec3::Zero());
 
-  // One frame of settings().dt in as many substeps as stability needs. With `plants`, their
-  // grown branch particles (kGrown, not kLeaf) and the air act on each other: this overwrites
-  // plants->externalAcceleration() (every slot; zero for particles that do not take part) with
-  // the air's drag and pressure on each particle. Call it before plants->step(env), at the
-  // same dt.
-  void step(const env::Environment& env, particles::ParticleWorld* plants);
+  // One frame of settings().dt in as many substeps as stability needs. With `plants` (the
+  // systems that take part, models::AirCoupling), their bodies (e.g. the grown branch particles
+  // of a particle world) and the air act on each other: this overwrites each system's
+  // airAcceleration() (every slot; zero for bodies outside the air) with the air's drag and
+  // pressure on each body. Call it before the plants step, at their airTimeStep().
+  void step(const env::Environment& env, std::span<models::AirCoupling* const> plants);
+  // The same for one system, or none (null).
+  void step(const env::Environment& env, models::AirCoupling* plants);
 
   // The air velocity w(x) (m/s) at p by SPH interpolation (eq. 12), Shepard-normalised where
   // the air is complete: Σ V_j v_j W / max(Σ V_j W, ½). It fades to zero at the edge of the
@@ -184,8 +185,8 @@ class SphAir final : public env::AirFlow {
   void buildGrid();
   void regrid();
   void scatterGrid();
-  void collectPlants(const particles::ParticleWorld& plants);
-  void plantSide(particles::ParticleWorld& plants);
+  void collectPlants(std::span<const models::AirBodies> bodies);
+  void plantSide(std::span<models::AirCoupling* const> systems, std::span<const models::AirBodies> bodies);
   void substep(const env::Environment& env, float dt);
   void substepPositionBased(const env::Environment& env, float dt);
   void move(const env::Environment& env, float dt, bool accelerate);

@@ -8,7 +8,7 @@
 #include <memory>
 #include <string>
 
-namespace tendril::scene {
+namespace tendril::models {
 
 // Model-specific settings of one plant (a climbing species, a grammar, a component graph...).
 struct ModelParams {
@@ -17,7 +17,7 @@ struct ModelParams {
 
 struct PlantSpec {
   std::string name;
-  std::string model = "climb";  // growth model, a name in models::modelTypes()
+  std::string model = "climb";  // growth model, a name in scene::modelTypes()
   std::string pointer;          // JSON pointer of the plant in the scene file, for messages
   Vec3 position = Vec3::Zero();   // seed point (m)
   Vec3 direction = Vec3::UnitY(); // initial growth direction
@@ -31,4 +31,4 @@ struct PlantSpec {
   }
 };
 
-}  // namespace tendril::scene
+}  // namespace tendril::models

@@ -1,4 +1,4 @@
-#include "tendril/wind/growth_flow.h"
+#include "tendril/plant/growth_flow.h"
 
 #include "tendril/core/error.h"
 #include "tendril/core/json_reader.h"
@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-namespace tendril::wind {
+namespace tendril::plant {
 
 void readGrowthFlow(JsonObject& o, GrowthFlowSpecies& s) {
   s.windMin = o.numberf("wind_min", s.windMin, 0.0, 100.0);
@@ -150,4 +150,4 @@ void GrowthFlowHistory::restore(std::vector<Sums> sums, std::vector<uint32_t> ac
   wind_ = wind;
 }
 
-}  // namespace tendril::wind
+}  // namespace tendril::plant

@@ -1,11 +1,11 @@
-#include "tendril/mesh/curve.h"
+#include "tendril/core/curve.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-namespace tendril::mesh {
+namespace tendril {
 namespace {
 
 TEST(MeshCurve, CatmullRomInterpolatesItsPoints) {
@@ -108,4 +108,4 @@ TEST(MeshCurve, DoubleReflectionSurvivesCoincidentPoints) {
 }
 
 }  // namespace
-}  // namespace tendril::mesh
+}  // namespace tendril

@@ -1,4 +1,4 @@
-#include "tendril/io/gltf_animation.h"
+#include "tendril/wind/gltf_animation.h"
 
 #include "tendril/core/error.h"
 #include "tendril/core/parallel.h"
@@ -17,7 +17,10 @@
 #include <sstream>
 #include <unordered_map>
 
-namespace tendril::io {
+namespace tendril::wind {
+
+// The clip is written with the export module's meshes, materials and atomic files.
+using namespace io;
 
 std::vector<int32_t> chooseJoints(const plant::PlantModel& plant, int maxJoints) {
   const size_t n = plant.nodeCount();
@@ -395,4 +398,4 @@ std::vector<std::filesystem::path> writeWindFrames(const std::vector<AnimatedPla
   return written;
 }
 
-}  // namespace tendril::io
+}  // namespace tendril::wind

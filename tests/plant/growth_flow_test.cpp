@@ -1,12 +1,12 @@
 // Growth-Flow's growth and leaf-motion equations (seed 001 eq. 6–17) against values worked out
 // by hand and an independent long-double evaluation.
-#include "tendril/wind/growth_flow.h"
+#include "tendril/plant/growth_flow.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-namespace tendril::wind {
+namespace tendril::plant {
 namespace {
 
 GrowthFlowSpecies paperSpecies() {
@@ -192,4 +192,4 @@ TEST(GrowthFlowLeaves, LeavesDetachAboveTheirStrength) {
 }
 
 }  // namespace
-}  // namespace tendril::wind
+}  // namespace tendril::plant

@@ -33,7 +33,7 @@ namespace tendril {
 class JsonObject;
 }
 
-namespace tendril::wind {
+namespace tendril::plant {
 
 struct GrowthFlowSpecies {
   // eq. 6: wind speeds (m/s) where growth starts to respond, and responds fully.
@@ -202,4 +202,4 @@ inline void updateLeafMotion(LeafMotionState& leaf, int type, float w, float gus
   *angles[k] = bounceAngle(*angles[k], *signs[k], ws, rates[k], dt, limits[k]);
 }
 
-}  // namespace tendril::wind
+}  // namespace tendril::plant

@@ -16,13 +16,13 @@
 #include "tendril/env/wind_field.h"
 #include "tendril/mesh/mesh_options.h"
 #include "tendril/plant/plant_model.h"
-#include "tendril/wind/growth_flow.h"
+#include "tendril/plant/growth_flow.h"
 
 #include <cstdint>
 #include <filesystem>
 #include <vector>
 
-namespace tendril::io {
+namespace tendril::wind {
 
 struct WindAnimationOptions {
   float seconds = 4.0f;  // clip length
@@ -34,7 +34,7 @@ struct WindAnimationOptions {
 
 struct AnimatedPlant {
   const plant::PlantModel* plant = nullptr;
-  wind::GrowthFlowSpecies species;
+  plant::GrowthFlowSpecies species;
 };
 
 struct WindAnimationStats {
@@ -57,4 +57,4 @@ std::vector<std::filesystem::path> writeWindFrames(const std::vector<AnimatedPla
                                                    const env::WindField& wind, const WindAnimationOptions& options,
                                                    const std::filesystem::path& dir, const std::string& stem);
 
-}  // namespace tendril::io
+}  // namespace tendril::wind

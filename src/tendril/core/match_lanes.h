@@ -16,7 +16,7 @@
 
 #include <cmath>
 
-namespace tendril::particles::lanes {
+namespace tendril::lanes {
 
 using F4 = float __attribute__((vector_size(16)));
 using M4 = int __attribute__((vector_size(16)));
@@ -143,4 +143,4 @@ inline Mat3 lane(const M3& a, int l) {
   return r;
 }
 
-}  // namespace tendril::particles::lanes
+}  // namespace tendril::lanes

@@ -15,7 +15,7 @@
 
 #include <span>
 
-namespace tendril::mesh {
+namespace tendril {
 
 // One segment of a curve in cubic Hermite form: p(s) for s in [0, 1] runs from p1 to p2.
 struct CurveSegment {
@@ -46,4 +46,4 @@ void rotationMinimizingFrames(std::span<const Vec3> points, std::span<const Vec3
 // perpendicular when hint is (nearly) parallel to t.
 Vec3 perpendicularTo(const Vec3& t, const Vec3& hint);
 
-}  // namespace tendril::mesh
+}  // namespace tendril

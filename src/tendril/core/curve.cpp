@@ -1,9 +1,9 @@
-#include "tendril/mesh/curve.h"
+#include "tendril/core/curve.h"
 
 #include <algorithm>
 #include <cassert>
 
-namespace tendril::mesh {
+namespace tendril {
 
 Vec3 CurveSegment::point(float s) const {
   // Cubic Hermite basis.
@@ -75,4 +75,4 @@ void rotationMinimizingFrames(std::span<const Vec3> points, std::span<const Vec3
     normals[i] = doubleReflection(points[i - 1], tangents[i - 1], normals[i - 1], points[i], tangents[i]);
 }
 
-}  // namespace tendril::mesh
+}  // namespace tendril
