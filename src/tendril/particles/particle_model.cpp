@@ -1,7 +1,7 @@
 #include "tendril/particles/particle_model.h"
 
-#include "tendril/core/embedded.h"
 #include "tendril/core/error.h"
+#include "tendril/scene/species_presets.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -10,13 +10,9 @@ namespace tendril::particles {
 
 namespace {
 
-void readSpeciesDocument(const Json& json, const std::string& source, const std::filesystem::path& dir,
-                         ParticleSpecies& s) {
-  JsonObject o(json, source);
-  std::string model = o.string("model", "");
-  if (model != "particles")
-    throw o.error("model", fmt::format("this species is for the \"{}\" model, not \"particles\"", model));
-  readParticleSpecies(o, s, dir.string());
+void readSpeciesDocument(const scene::SpeciesDocument& d, ParticleSpecies& s) {
+  JsonObject o(d.json, d.source);
+  readParticleSpecies(o, s, d.dir.string());  // its "model" was checked by the loader
   o.finish();
 }
 
@@ -43,32 +39,8 @@ std::shared_ptr<const scene::ModelParams> readParticlePlant(JsonObject& o, const
 
 ParticleSpecies loadSpecies(const std::string& ref, const std::filesystem::path& baseDir, const std::string& source,
                             const std::string& pointer) {
-  bool isPath = ref.find('/') != std::string::npos || (ref.size() > 5 && ref.compare(ref.size() - 5, 5, ".json") == 0);
   ParticleSpecies s;
-  if (!isPath) {
-    const EmbeddedFile* f = findEmbeddedFile("species/" + ref + ".json");
-    if (!f) {
-      std::string names;
-      for (const EmbeddedFile& e : embeddedFiles()) {
-        if (e.path.rfind("species/", 0) != 0) continue;
-        if (e.contents.find("\"model\": \"particles\"") == std::string_view::npos) continue;
-        names += (names.empty() ? "" : ", ") + std::string(e.path.substr(8, e.path.size() - 13));
-      }
-      throw Error(source, pointer,
-                  fmt::format("unknown particle species \"{}\" (built-in: {}; or give a path to a .json file)", ref,
-                              names));
-    }
-    std::string name = "<built-in>/" + std::string(f->path);
-    try {
-      readSpeciesDocument(parseJson(f->contents, name), name, "", s);
-    } catch (const Error& e) {
-      throw Error(source, pointer, e.what());
-    }
-    return s;
-  }
-  std::filesystem::path p = std::filesystem::path(ref).is_absolute() ? std::filesystem::path(ref) : baseDir / ref;
-  if (!std::filesystem::exists(p)) throw Error(source, pointer, fmt::format("species file {} does not exist", p.string()));
-  readSpeciesDocument(readJsonFile(p), p.string(), p.parent_path(), s);
+  readSpeciesDocument(scene::loadSpeciesDocument("particles", ref, baseDir, source, pointer), s);
   return s;
 }
 
