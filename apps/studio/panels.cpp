@@ -7,7 +7,10 @@
 #include "tendril/core/json_reader.h"
 #include "tendril/graph/graph_model.h"
 #include "tendril/lsystem/lsystem_model.h"
+#include "tendril/core/schema.h"
+#include "tendril/particles/species_schema.h"
 #include "tendril/particles/world.h"
+#include "tendril/scene/settings_schema.h"
 
 #include <fmt/format.h>
 #include <imgui.h>
@@ -41,6 +44,32 @@ bool editVec3(const char* label, Vec3& v, float speed, const char* format = "%.3
   ImGui::DragFloat3(label, values, speed, -extent, extent, format, ImGuiSliderFlags_AlwaysClamp);
   v = Vec3(values[0], values[1], values[2]);
   return ImGui::IsItemDeactivatedAfterEdit();
+}
+
+// A slider for one number of a settings description (scene/settings_schema.h,
+// particles/species_schema.h): its label, unit and range come from there. The value follows
+// the slider; the result says when an edit was finished.
+template <class T>
+bool fieldSlider(const schema::Field<T>& f, T& v, const char* format = "%.3f") {
+  const std::string label = f.labelWithUnit();
+  if (f.kind == schema::Kind::Integer) {
+    int x = int(schema::fileValue(f, v));
+    ImGui::SliderInt(label.c_str(), &x, int(f.sliderLow()), int(f.sliderHigh()), "%d", ImGuiSliderFlags_AlwaysClamp);
+    schema::setFileValue(f, v, x);
+  } else {
+    const float shown = float(schema::fileValue(f, v));
+    float x = shown;
+    ImGui::SliderFloat(label.c_str(), &x, float(f.sliderLow()), float(f.sliderHigh()), format,
+                       ImGuiSliderFlags_AlwaysClamp);
+    if (x != shown) schema::setFileValue(f, v, x);  // an untouched angle keeps its bits
+  }
+  return ImGui::IsItemDeactivatedAfterEdit();
+}
+
+// The label of a field, with its unit, for widgets that are not sliders.
+template <class T>
+std::string fieldLabel(const schema::Schema<T>& s, std::string_view key) {
+  return s.at(key).labelWithUnit();
 }
 
 }  // namespace
@@ -373,41 +402,37 @@ void Studio::Impl::drawParticleSpecies(uint32_t p) {
   ImGui::Text("Species %s", s.name.c_str());
   ImGui::TextDisabled("Table 2: N = %zu plant(s) in the scene", session->plantCount());
   ImGui::PushItemWidth(150);
-  auto floatKey = [&](const char* label, const char* key, float value, float lo, float hi, const char* format = "%.3f") {
-    float v = value;
-    ImGui::SliderFloat(label, &v, lo, hi, format);
-    if (ImGui::IsItemDeactivatedAfterEdit() && v != value) {
+  // Each key's label, unit and slider range come from the species' description; a finished
+  // edit applies the key alone.
+  auto speciesKey = [&](std::string_view key, const char* format = "%.3f") {
+    const schema::Field<particles::ParticleSpecies>& f = particles::particleSpeciesSchema().at(key);
+    particles::ParticleSpecies edited = s;
+    if (fieldSlider(f, edited, format) && schema::fileValue(f, edited) != schema::fileValue(f, s)) {
       session::SetSpecies edit;
       edit.plant = p;
-      edit.keys = Json::object({{key, v}});
+      const double v = schema::fileValue(f, edited);
+      edit.keys = Json::object({{std::string(key), f.kind == schema::Kind::Integer ? Json(int(v)) : Json(float(v))}});
       apply(edit);
     }
   };
-  int buds = s.maxLateralBuds;
-  ImGui::SliderInt("B lateral buds", &buds, 0, 8);
-  if (ImGui::IsItemDeactivatedAfterEdit() && buds != s.maxLateralBuds) {
-    session::SetSpecies edit;
-    edit.plant = p;
-    edit.keys = Json::object({{"lateral_buds", buds}});
-    apply(edit);
-  }
-  floatKey("BP branch probability", "branch_probability", s.branchProbability, 0.0f, 1.0f);
-  floatKey("V branch variance", "branch_variance", s.branchVariance, 0.0f, 1.0f);
-  floatKey("Ph phototropism", "phototropism", s.phototropism, 0.0f, 2.0f);
+  speciesKey("lateral_buds");
+  speciesKey("branch_probability");
+  speciesKey("branch_variance");
+  speciesKey("phototropism");
   ImGui::Separator();
-  floatKey("growth rate (m/s)", "growth_rate", s.growthRate, 0.0f, 0.1f, "%.4f");
-  floatKey("growth speed", "growth_speed", s.growthSpeed, 0.0f, 100.0f, "%.1f");
-  floatKey("particle length (m)", "particle_length", s.particleLength, 0.005f, 0.5f, "%.3f");
-  floatKey("surface adaption", "surface_adaption", s.surfaceAdaption, 0.0f, 1.0f);
-  floatKey("random walk", "random_walk", s.randomWalk, 0.0f, 1.0f);
-  floatKey("attraction", "attraction", s.attraction, 0.0f, 5.0f);
-  floatKey("spreading", "spreading", s.spreading, 0.0f, 5.0f);
+  speciesKey("growth_rate", "%.4f");
+  speciesKey("growth_speed", "%.1f");
+  speciesKey("particle_length");
+  speciesKey("surface_adaption");
+  speciesKey("random_walk");
+  speciesKey("attraction");
+  speciesKey("spreading");
   ImGui::Separator();
-  floatKey("stiffness", "stiffness", s.stiffness, 0.0f, 1.0f);
-  floatKey("break threshold", "break_threshold", s.breakThreshold, 0.0f, 1.0f);
-  floatKey("max strain", "max_strain", s.maxStrain, 0.01f, 2.0f);
-  floatKey("anchor strength", "anchor_strength", s.anchorStrength, 0.0f, 0.99f);
-  floatKey("damping", "damping", s.damping, 0.0f, 1.0f);
+  speciesKey("stiffness");
+  speciesKey("break_threshold");
+  speciesKey("max_strain");
+  speciesKey("anchor_strength");
+  speciesKey("damping");
   ImGui::PopItemWidth();
 }
 
@@ -458,15 +483,15 @@ void Studio::Impl::drawLightPanel(uint32_t index) {
   ImGui::Text("%s light %u", l.type == env::Light::Type::Directional ? "Directional" : "Point", index);
   ImGui::PushItemWidth(220);
   bool changed = false;
+  const auto& schema = scene::lightSchema();
   if (l.type == env::Light::Type::Directional) {
-    changed |= editVec3("direction", l.direction, 0.01f);
+    changed |= editVec3(fieldLabel(schema, "direction").c_str(), l.direction, 0.01f);
     if (l.direction.squaredNorm() > 1e-8f) l.direction.normalize();
     else l.direction = lights[index].direction;
   } else {
-    changed |= editVec3("position (m)", l.position, 0.01f);
+    changed |= editVec3(fieldLabel(schema, "position").c_str(), l.position, 0.01f);
   }
-  ImGui::SliderFloat("intensity", &l.intensity, 0.0f, 4.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  changed |= fieldSlider(schema.at("intensity"), l);
   ImGui::PopItemWidth();
   if (changed) apply(session::MoveLight{index, l});
 }
@@ -480,20 +505,12 @@ void Studio::Impl::drawEmitterPanel(uint32_t index) {
   env::WindEmitter e = emitters[index];
   ImGui::Text("Wind emitter %u", index);
   ImGui::PushItemWidth(220);
-  bool changed = editVec3("position (m)", e.position, 0.01f);
-  changed |= editVec3("direction", e.direction, 0.01f);
+  const auto& schema = scene::emitterSchema();
+  bool changed = editVec3(fieldLabel(schema, "position").c_str(), e.position, 0.01f);
+  changed |= editVec3(fieldLabel(schema, "direction").c_str(), e.direction, 0.01f);
   if (e.direction.squaredNorm() > 1e-8f) e.direction.normalize();
   else e.direction = emitters[index].direction;
-  ImGui::SliderFloat("speed (m/s)", &e.speed, 0.0f, 30.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
-  ImGui::SliderFloat("radius (m)", &e.radius, 0.01f, 5.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
-  ImGui::SliderFloat("reach (m)", &e.reach, 0.1f, 50.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
-  float spread = e.spread * 180.0f / kPi;
-  ImGui::SliderFloat("spread (deg)", &spread, 0.0f, 45.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  e.spread = spread * kPi / 180.0f;
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  for (const char* key : {"speed", "radius", "reach", "spread"}) changed |= fieldSlider(schema.at(key), e);
   ImGui::PopItemWidth();
   if (changed) apply(session::EditEmitter{index, e});
   if (ImGui::Button("Remove emitter")) {

@@ -5,6 +5,7 @@
 #include "session/session_test_util.h"
 #include "tendril/core/error.h"
 #include "tendril/core/schema.h"
+#include "tendril/particles/species_schema.h"
 #include "tendril/scene/settings_schema.h"
 #include "tendril/session/edit.h"
 #include "tendril/session/edit_script.h"
@@ -361,6 +362,11 @@ TEST(SettingsReaders, ChecksApplyTheReadersLimits) {
   expectSameLimits<scene::OutputSettings>(scene::outputSchema(), Json::object(), output);
   expectSameLimits<scene::OutputSettings>(scene::windAnimationSchema(), parseJson(R"({"wind_animation": {}})", "j"),
                                           output);
+  expectSameLimits<particles::ParticleSpecies>(particles::particleSpeciesSchema(), Json::object(), [](JsonObject& o) {
+    particles::ParticleSpecies s;
+    particles::readParticleSpecies(o, s, "");
+    return s;
+  });
   // The defaults pass the checks, and a value made of them is what an empty object reads.
   EXPECT_FALSE(scene::checkLight(env::Light{}));
   EXPECT_FALSE(scene::checkEmitter(env::WindEmitter{}));
@@ -425,8 +431,14 @@ template <class T>
 void expectTableAgrees(const std::string& docName, const std::string& heading, const schema::Schema<T>& s,
                        std::vector<std::string> others = {}) {
   const std::map<std::string, std::string> rows = tableAfter(readDoc(docName), heading);
+  // An entry of `others` ending in "." stands for every key it begins ("leaf.").
+  auto other = [&](const std::string& key) {
+    for (const std::string& o : others)
+      if (o == key || (o.back() == '.' && key.rfind(o, 0) == 0)) return true;
+    return false;
+  };
   for (const auto& [key, row] : rows)
-    EXPECT_TRUE(s.find(key) || std::find(others.begin(), others.end(), key) != others.end())
+    EXPECT_TRUE(s.find(key) || other(key))
         << docName << " " << heading << ": `" << key << "` is not a key of the " << s.name << " settings";
   for (const schema::Field<T>& f : s.fields) {
     SCOPED_TRACE(docName + " " + heading + " " + std::string(f.key));
@@ -443,6 +455,8 @@ void expectTableAgrees(const std::string& docName, const std::string& heading, c
       case schema::Kind::Direction: expected = vecText(f.fallbackVec); break;
       case schema::Kind::Boolean: expected = f.fallback != 0.0 ? "`true`" : "`false`"; break;
       case schema::Kind::Points: break;
+      case schema::Kind::Number:
+      case schema::Kind::Angle: expected = fmt::format("`{}`", float(f.fallback)); break;  // as the float it is
       default: expected = "`" + schema::formatNumber(f.fallback) + "`";
     }
     if (f.required) expected = "**required**";
@@ -471,6 +485,7 @@ TEST(SettingsReaders, DocsTablesAgreeWithTheSchemas) {
   expectTableAgrees("scene-format.md", "#### Wind emitters", scene::emitterSchema());
   expectTableAgrees("scene-format.md", "## Output", scene::outputSchema(), {"wind_animation"});
   expectTableAgrees("scene-format.md", "#### Wind animation", scene::windAnimationSchema());
+  expectTableAgrees("particles.md", "## Species keys", particles::particleSpeciesSchema(), {"leaf.", "bark."});
 }
 
 // The JSON examples of docs/edit-scripts.md are edits the reader takes, and the scene format's

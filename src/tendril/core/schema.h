@@ -67,10 +67,21 @@ struct Field {
   std::variant<std::monostate, float T::*, int T::*, uint64_t T::*, bool T::*, Vec3 T::*, std::vector<Vec3> T::*>
       member;
 
+  // Where a widget's slider runs, when narrower than the valid range (a species' growth speed
+  // may be 1e6; its slider stops at 100). Values beyond it are still valid when typed or read.
+  double sliderMin = std::numeric_limits<double>::quiet_NaN();
+  double sliderMax = std::numeric_limits<double>::quiet_NaN();
+
   Field& require() {
     required = true;
     return *this;
   }
+  Field& slider(double lo, double hi) {
+    sliderMin = lo, sliderMax = hi;
+    return *this;
+  }
+  double sliderLow() const { return sliderMin == sliderMin ? sliderMin : min; }
+  double sliderHigh() const { return sliderMax == sliderMax ? sliderMax : max; }
   // The label with its unit, as a widget shows it: "speed (m/s)".
   std::string labelWithUnit() const {
     return unit.empty() ? std::string(label) : std::string(label) + " (" + std::string(unit) + ")";

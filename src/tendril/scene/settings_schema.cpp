@@ -26,7 +26,8 @@ const s::Schema<Light>& lightSchema() {
           s::vec3<Light>("position", &Light::position, Vec3::Zero(), -JsonObject::kWorldExtent,
                          JsonObject::kWorldExtent, "m", "position", "point: where the light is; required for `point`"),
           s::number<Light>("intensity", &Light::intensity, 1.0, 0.0, 1e6, "", "intensity",
-                           "relative weight among the lights"),
+                           "relative weight among the lights")
+              .slider(0.0, 4.0),
           s::angle<Light>("angular_radius", &Light::angularRadius, 0.0, 0.0, 45.0, "angular radius",
                           "angular radius of the light, for soft shadows"),
           s::integer<Light>("samples", &Light::samples, 1, 1, 256, "samples",
@@ -45,13 +46,17 @@ const s::Schema<WindEmitter>& emitterSchema() {
           s::direction<WindEmitter>("direction", &WindEmitter::direction, Vec3::UnitX(), "direction",
                                     "the direction it blows (normalised)"),
           s::number<WindEmitter>("speed", &WindEmitter::speed, 5.0, 0.0, 1000.0, "m/s", "speed",
-                                 "air speed at the nozzle"),
+                                 "air speed at the nozzle")
+              .slider(0.0, 30.0),
           s::number<WindEmitter>("radius", &WindEmitter::radius, 0.5, 1e-4, 1000.0, "m", "radius",
-                                 "radius of the nozzle"),
+                                 "radius of the nozzle")
+              .slider(0.01, 5.0),
           s::number<WindEmitter>("reach", &WindEmitter::reach, 10.0, 0.0, 1e6, "m", "reach",
-                                 "length of the jet along its direction"),
+                                 "length of the jet along its direction")
+              .slider(0.1, 50.0),
           s::angle<WindEmitter>("spread", &WindEmitter::spread, 8.0, 0.0, 89.0, "spread",
-                                "half-angle the jet widens by"),
+                                "half-angle the jet widens by")
+              .slider(0.0, 45.0),
           s::number<WindEmitter>("rate", &WindEmitter::rate, 0.0, 0.0, 1e9, "1/s", "rate",
                                  "air particles per second in `sph` mode (`0`: from speed and area)"),
       }};
