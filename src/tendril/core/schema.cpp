@@ -57,7 +57,18 @@ namespace detail {
 void read(JsonObject& o, const Limits& f, double* scalar, Vec3* vec, std::vector<Vec3>* points, uint64_t* seed) {
   switch (f.kind) {
     case Kind::Number:
-    case Kind::Angle: *scalar = o.number(f.key, 0.0, f.min, f.max); return;
+    case Kind::Angle: {
+      // The limits apply to the value as kept (a float; radians), as check() applies them: a
+      // value written at a limit reads back although its decimal form lies a rounding beyond.
+      *scalar = o.number(f.key, 0.0);
+      const double kept = f.kind == Kind::Angle ? double(fromDegrees(*scalar)) : double(float(*scalar));
+      const bool within = f.kind == Kind::Angle
+                              ? kept >= double(fromDegrees(f.min)) && kept <= double(fromDegrees(f.max))
+                              : withinFloat(kept, f.min, f.max);
+      if (!within)
+        throw o.error(f.key, fmt::format("must be {}, got {}", rangeText(f.min, f.max), o.json().at(f.key).dump()));
+      return;
+    }
     case Kind::Integer: *scalar = double(o.integer(f.key, 0, int64_t(f.min), int64_t(f.max))); return;
     case Kind::Seed: *seed = o.seed(f.key, 0); return;
     case Kind::Boolean: *scalar = o.boolean(f.key, false) ? 1.0 : 0.0; return;
