@@ -48,19 +48,20 @@ bool editVec3(const char* label, Vec3& v, float speed, const char* format = "%.3
 
 // A slider for one number of a settings description (scene/settings_schema.h,
 // particles/species_schema.h): its label, unit and range come from there. The value follows
-// the slider; the result says when an edit was finished.
+// the slider; the result says when an edit was finished. `clamp`: typed values stay within the
+// slider's range too (else they may go beyond, and the edit checks them).
 template <class T>
-bool fieldSlider(const schema::Field<T>& f, T& v, const char* format = "%.3f") {
+bool fieldSlider(const schema::Field<T>& f, T& v, const char* format = "%.3f", bool clamp = true) {
   const std::string label = f.labelWithUnit();
+  const ImGuiSliderFlags flags = clamp ? ImGuiSliderFlags_AlwaysClamp : ImGuiSliderFlags_None;
   if (f.kind == schema::Kind::Integer) {
     int x = int(schema::fileValue(f, v));
-    ImGui::SliderInt(label.c_str(), &x, int(f.sliderLow()), int(f.sliderHigh()), "%d", ImGuiSliderFlags_AlwaysClamp);
+    ImGui::SliderInt(label.c_str(), &x, int(f.sliderLow()), int(f.sliderHigh()), "%d", flags);
     schema::setFileValue(f, v, x);
   } else {
     const float shown = float(schema::fileValue(f, v));
     float x = shown;
-    ImGui::SliderFloat(label.c_str(), &x, float(f.sliderLow()), float(f.sliderHigh()), format,
-                       ImGuiSliderFlags_AlwaysClamp);
+    ImGui::SliderFloat(label.c_str(), &x, float(f.sliderLow()), float(f.sliderHigh()), format, flags);
     if (x != shown) schema::setFileValue(f, v, x);  // an untouched angle keeps its bits
   }
   return ImGui::IsItemDeactivatedAfterEdit();
@@ -407,7 +408,7 @@ void Studio::Impl::drawParticleSpecies(uint32_t p) {
   auto speciesKey = [&](std::string_view key, const char* format = "%.3f") {
     const schema::Field<particles::ParticleSpecies>& f = particles::particleSpeciesSchema().at(key);
     particles::ParticleSpecies edited = s;
-    if (fieldSlider(f, edited, format) && schema::fileValue(f, edited) != schema::fileValue(f, s)) {
+    if (fieldSlider(f, edited, format, false) && schema::fileValue(f, edited) != schema::fileValue(f, s)) {
       session::SetSpecies edit;
       edit.plant = p;
       const double v = schema::fileValue(f, edited);
