@@ -4,6 +4,7 @@
 // "/edits/0", the saved state's "/lights/0").
 #include "session/session_test_util.h"
 #include "tendril/core/error.h"
+#include "tendril/climb/species_schema.h"
 #include "tendril/core/schema.h"
 #include "tendril/particles/species_schema.h"
 #include "tendril/scene/settings_schema.h"
@@ -305,7 +306,8 @@ std::string rule(const std::string& message) { return message.substr(0, message.
 // and the check of the same value set directly agree (both accept it, or both refuse it at the
 // same key with the same rule), and the value read is the value set.
 template <class T>
-void expectSameLimits(const schema::Schema<T>& s, const Json& base, const std::function<T(JsonObject&)>& read) {
+void expectSameLimits(const schema::Schema<T>& s, const Json& base, const std::function<T(JsonObject&)>& read,
+                      const std::string& nest = "") {
   T valid;
   {
     JsonObject o(base, "x");
@@ -323,10 +325,10 @@ void expectSameLimits(const schema::Schema<T>& s, const Json& base, const std::f
       SCOPED_TRACE(fmt::format("{} {} = {}", s.name, f.key, v));
       Json j = base;
       Json* at = &j;
-      if (!j.contains(std::string(f.key)) && j.contains("wind_animation")) at = &j["wind_animation"];
+      if (!nest.empty()) at = &j[nest];  // the schema's keys are in this object of `base`
       (*at)[std::string(f.key)] = f.kind == schema::Kind::Integer ? Json(int64_t(v)) : Json(v);
       std::string readError;
-      T got{};
+      T got = valid;
       try {
         JsonObject o(j, "x");
         got = read(o);
@@ -361,7 +363,17 @@ TEST(SettingsReaders, ChecksApplyTheReadersLimits) {
   };
   expectSameLimits<scene::OutputSettings>(scene::outputSchema(), Json::object(), output);
   expectSameLimits<scene::OutputSettings>(scene::windAnimationSchema(), parseJson(R"({"wind_animation": {}})", "j"),
-                                          output);
+                                          output, "wind_animation");
+  auto climbSpecies = [](JsonObject& o) {
+    climb::ClimbSpecies s;
+    climb::readClimbSpecies(o, s, "");
+    return s;
+  };
+  expectSameLimits<climb::ClimbSpecies>(climb::climbSpeciesSchema(), Json::object(), climbSpecies);
+  expectSameLimits<climb::ClimbSpecies>(climb::climbTropismsSchema(), parseJson(R"({"tropisms": {}})", "j"),
+                                        climbSpecies, "tropisms");
+  expectSameLimits<climb::ClimbSpecies>(climb::climbDecreaseSchema(), parseJson(R"({"decrease": {}})", "j"),
+                                        climbSpecies, "decrease");
   expectSameLimits<particles::ParticleSpecies>(particles::particleSpeciesSchema(), Json::object(), [](JsonObject& o) {
     particles::ParticleSpecies s;
     particles::readParticleSpecies(o, s, "");
@@ -428,9 +440,11 @@ std::string lower(std::string s) {
 // Every key of the schema has a row giving its default, its range and its unit; every row is
 // a key of the schema or one of `others`.
 template <class T>
-void expectTableAgrees(const std::string& docName, const std::string& heading, const schema::Schema<T>& s,
-                       std::vector<std::string> others = {}) {
-  const std::map<std::string, std::string> rows = tableAfter(readDoc(docName), heading);
+void expectTableAgrees(const std::string& docName, const std::vector<std::string>& headings,
+                       const schema::Schema<T>& s, std::vector<std::string> others = {}) {
+  std::map<std::string, std::string> rows;
+  for (const std::string& h : headings) rows.merge(tableAfter(readDoc(docName), h));
+  const std::string heading = headings.front();
   // An entry of `others` ending in "." stands for every key it begins ("leaf.").
   auto other = [&](const std::string& key) {
     for (const std::string& o : others)
@@ -479,13 +493,16 @@ void expectTableAgrees(const std::string& docName, const std::string& heading, c
 }
 
 TEST(SettingsReaders, DocsTablesAgreeWithTheSchemas) {
-  expectTableAgrees("scene-format.md", "### Lights", scene::lightSchema());
-  expectTableAgrees("scene-format.md", "### Strokes", scene::strokeSchema());
-  expectTableAgrees("scene-format.md", "### Wind", scene::windSchema(), {"emitters", "sph"});
-  expectTableAgrees("scene-format.md", "#### Wind emitters", scene::emitterSchema());
-  expectTableAgrees("scene-format.md", "## Output", scene::outputSchema(), {"wind_animation"});
-  expectTableAgrees("scene-format.md", "#### Wind animation", scene::windAnimationSchema());
-  expectTableAgrees("particles.md", "## Species keys", particles::particleSpeciesSchema(), {"leaf.", "bark."});
+  expectTableAgrees("scene-format.md", {"### Lights"}, scene::lightSchema());
+  expectTableAgrees("scene-format.md", {"### Strokes"}, scene::strokeSchema());
+  expectTableAgrees("scene-format.md", {"### Wind"}, scene::windSchema(), {"emitters", "sph"});
+  expectTableAgrees("scene-format.md", {"#### Wind emitters"}, scene::emitterSchema());
+  expectTableAgrees("scene-format.md", {"## Output"}, scene::outputSchema(), {"wind_animation"});
+  expectTableAgrees("scene-format.md", {"#### Wind animation"}, scene::windAnimationSchema());
+  expectTableAgrees("particles.md", {"## Species keys"}, particles::particleSpeciesSchema(), {"leaf.", "bark."});
+  expectTableAgrees("species.md", {"### Shoot size (eq. 8)", "### Climbing", "### Branching (§3.7)"},
+                    climb::climbSpeciesSchema(), {"decrease", "release_angle", "branch_angle"});
+  expectTableAgrees("species.md", {"### Tropisms (eq. 3–4, 6–7)"}, climb::climbTropismsSchema());
 }
 
 // The JSON examples of docs/edit-scripts.md are edits the reader takes, and the scene format's
