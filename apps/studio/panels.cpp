@@ -536,11 +536,18 @@ void Studio::Impl::drawStrokePanel(uint32_t index) {
 void Studio::Impl::drawWindPanel() {
   if (!ImGui::CollapsingHeader("Wind", ImGuiTreeNodeFlags_DefaultOpen)) return;
   const env::WindSettings& w = session->environment().windField().settings();
-  static const char* modes[] = {"constant", "gusty", "sph"};
-  int mode = std::clamp(int(w.mode), 0, 2);
-  ImGui::Text("mode %s, prevailing %.2f, %.2f, %.2f m/s", modes[mode], w.velocity.x(), w.velocity.y(), w.velocity.z());
+  // The scene's wind settings as their description names them (scene/settings_schema.h).
+  const auto& schema = scene::windSchema();
+  const auto& modes = schema.at("mode").choices;
+  const size_t mode = std::min(size_t(w.mode), modes.size() - 1);
+  ImGui::Text("%s %s, %s %.2f, %.2f, %.2f", std::string(schema.at("mode").label).c_str(),
+              std::string(modes[mode]).c_str(), fieldLabel(schema, "velocity").c_str(), w.velocity.x(), w.velocity.y(),
+              w.velocity.z());
   ImGui::Text("%zu emitter(s)", w.emitters.size());
-  ImGui::Text("gusts: strength %.2f, period %.1f s, scale %.1f m", w.gustStrength, w.gustPeriod, w.gustScale);
+  for (const char* key : {"gust_strength", "gust_period", "gust_scale", "gust_turn"}) {
+    const auto& f = schema.at(key);
+    ImGui::Text("%s: %.2f", f.labelWithUnit().c_str(), schema::fileValue(f, w));
+  }
   if (const wind::SphAir* air = session->air()) {
     ImGui::Text("simulated air: %zu particles", air->count());
     ImGui::Checkbox("show the air", &showAir);
