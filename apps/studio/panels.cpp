@@ -7,6 +7,8 @@
 #include "tendril/core/json_reader.h"
 #include "tendril/graph/graph_model.h"
 #include "tendril/lsystem/lsystem_model.h"
+#include "tendril/core/schema.h"
+#include "tendril/scene/settings_schema.h"
 
 #include <fmt/format.h>
 #include <imgui.h>
@@ -40,6 +42,33 @@ bool editVec3(const char* label, Vec3& v, float speed, const char* format = "%.3
   ImGui::DragFloat3(label, values, speed, -extent, extent, format, ImGuiSliderFlags_AlwaysClamp);
   v = Vec3(values[0], values[1], values[2]);
   return ImGui::IsItemDeactivatedAfterEdit();
+}
+
+// A slider for one number of a settings description (scene/settings_schema.h,
+// particles/species_schema.h): its label, unit and range come from there. The value follows
+// the slider; the result says when an edit was finished. `clamp`: typed values stay within the
+// slider's range too (else they may go beyond, and the edit checks them).
+template <class T>
+bool fieldSlider(const schema::Field<T>& f, T& v, const char* format = "%.3f", bool clamp = true) {
+  const std::string label = f.labelWithUnit();
+  const ImGuiSliderFlags flags = clamp ? ImGuiSliderFlags_AlwaysClamp : ImGuiSliderFlags_None;
+  if (f.kind == schema::Kind::Integer) {
+    int x = int(schema::fileValue(f, v));
+    ImGui::SliderInt(label.c_str(), &x, int(f.sliderLow()), int(f.sliderHigh()), "%d", flags);
+    schema::setFileValue(f, v, x);
+  } else {
+    const float shown = float(schema::fileValue(f, v));
+    float x = shown;
+    ImGui::SliderFloat(label.c_str(), &x, float(f.sliderLow()), float(f.sliderHigh()), format, flags);
+    if (x != shown) schema::setFileValue(f, v, x);  // an untouched angle keeps its bits
+  }
+  return ImGui::IsItemDeactivatedAfterEdit();
+}
+
+// The label of a field, with its unit, for widgets that are not sliders.
+template <class T>
+std::string fieldLabel(const schema::Schema<T>& s, std::string_view key) {
+  return s.at(key).labelWithUnit();
 }
 
 }  // namespace
@@ -447,15 +476,15 @@ void Studio::Impl::drawLightPanel(uint32_t index) {
   ImGui::Text("%s light %u", l.type == env::Light::Type::Directional ? "Directional" : "Point", index);
   ImGui::PushItemWidth(220);
   bool changed = false;
+  const auto& schema = scene::lightSchema();
   if (l.type == env::Light::Type::Directional) {
-    changed |= editVec3("direction", l.direction, 0.01f);
+    changed |= editVec3(fieldLabel(schema, "direction").c_str(), l.direction, 0.01f);
     if (l.direction.squaredNorm() > 1e-8f) l.direction.normalize();
     else l.direction = lights[index].direction;
   } else {
-    changed |= editVec3("position (m)", l.position, 0.01f);
+    changed |= editVec3(fieldLabel(schema, "position").c_str(), l.position, 0.01f);
   }
-  ImGui::SliderFloat("intensity", &l.intensity, 0.0f, 4.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  changed |= fieldSlider(schema.at("intensity"), l);
   ImGui::PopItemWidth();
   if (changed) apply(session::MoveLight{index, l});
 }
@@ -469,20 +498,12 @@ void Studio::Impl::drawEmitterPanel(uint32_t index) {
   env::WindEmitter e = emitters[index];
   ImGui::Text("Wind emitter %u", index);
   ImGui::PushItemWidth(220);
-  bool changed = editVec3("position (m)", e.position, 0.01f);
-  changed |= editVec3("direction", e.direction, 0.01f);
+  const auto& schema = scene::emitterSchema();
+  bool changed = editVec3(fieldLabel(schema, "position").c_str(), e.position, 0.01f);
+  changed |= editVec3(fieldLabel(schema, "direction").c_str(), e.direction, 0.01f);
   if (e.direction.squaredNorm() > 1e-8f) e.direction.normalize();
   else e.direction = emitters[index].direction;
-  ImGui::SliderFloat("speed (m/s)", &e.speed, 0.0f, 30.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
-  ImGui::SliderFloat("radius (m)", &e.radius, 0.01f, 5.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
-  ImGui::SliderFloat("reach (m)", &e.reach, 0.1f, 50.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
-  float spread = e.spread * 180.0f / kPi;
-  ImGui::SliderFloat("spread (deg)", &spread, 0.0f, 45.0f, "%.3f", ImGuiSliderFlags_AlwaysClamp);
-  e.spread = spread * kPi / 180.0f;
-  changed |= ImGui::IsItemDeactivatedAfterEdit();
+  for (const char* key : {"speed", "radius", "reach", "spread"}) changed |= fieldSlider(schema.at(key), e);
   ImGui::PopItemWidth();
   if (changed) apply(session::EditEmitter{index, e});
   if (ImGui::Button("Remove emitter")) {
@@ -507,11 +528,18 @@ void Studio::Impl::drawStrokePanel(uint32_t index) {
 void Studio::Impl::drawWindPanel() {
   if (!ImGui::CollapsingHeader("Wind", ImGuiTreeNodeFlags_DefaultOpen)) return;
   const env::WindSettings& w = session->environment().windField().settings();
-  static const char* modes[] = {"constant", "gusty", "sph"};
-  int mode = std::clamp(int(w.mode), 0, 2);
-  ImGui::Text("mode %s, prevailing %.2f, %.2f, %.2f m/s", modes[mode], w.velocity.x(), w.velocity.y(), w.velocity.z());
+  // The scene's wind settings as their description names them (scene/settings_schema.h).
+  const auto& schema = scene::windSchema();
+  const auto& modes = schema.at("mode").choices;
+  const size_t mode = std::min(size_t(w.mode), modes.size() - 1);
+  ImGui::Text("%s %s, %s %.2f, %.2f, %.2f", std::string(schema.at("mode").label).c_str(),
+              std::string(modes[mode]).c_str(), fieldLabel(schema, "velocity").c_str(), w.velocity.x(), w.velocity.y(),
+              w.velocity.z());
   ImGui::Text("%zu emitter(s)", w.emitters.size());
-  ImGui::Text("gusts: strength %.2f, period %.1f s, scale %.1f m", w.gustStrength, w.gustPeriod, w.gustScale);
+  for (const char* key : {"gust_strength", "gust_period", "gust_scale", "gust_turn"}) {
+    const auto& f = schema.at(key);
+    ImGui::Text("%s: %.2f", f.labelWithUnit().c_str(), schema::fileValue(f, w));
+  }
   if (const wind::SphAir* air = session->air()) {
     ImGui::Text("simulated air: %zu particles", air->count());
     ImGui::Checkbox("show the air", &showAir);

@@ -60,7 +60,8 @@ TEST(ParticleCli, BadSpeciesValuesNameFileAndPointer) {
   std::ofstream(scene) << R"({"tendril": 1, "plants": [{"model": "particles", "position": [0, 0, 0], "species": "no-such"}]})";
   r = test::runTendril("validate " + quoted(scene), dir);
   EXPECT_EQ(r.exitCode, 2);
-  EXPECT_NE(r.err.find("unknown particle species \"no-such\""), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("unknown species \"no-such\" (built-in particles species: ivy-particles;"), std::string::npos)
+      << r.err;
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 #include "tendril/climb/climb_model.h"
 
 #include "tendril/climb/climb_system.h"
-#include "tendril/core/embedded.h"
 #include "tendril/core/error.h"
+#include "tendril/models/species_presets.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -11,20 +11,10 @@ namespace tendril::climb {
 
 namespace {
 
-constexpr std::string_view kSpeciesDir = "species/";
-
-std::string joinNames(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
 // Reads a species document (a preset or a user file) into `s`.
-void readSpeciesDocument(const Json& json, const std::string& source, const std::filesystem::path& dir,
-                         ClimbSpecies& s) {
-  JsonObject o(json, source);
-  o.choice("model", "climb", {"climb"});
-  readClimbSpecies(o, s, dir.string());
+void readSpeciesDocument(const models::SpeciesDocument& d, ClimbSpecies& s) {
+  JsonObject o(d.json, d.source);
+  readClimbSpecies(o, s, d.dir.string());  // its "model" was checked by the loader
   o.finish();
 }
 
@@ -80,35 +70,12 @@ std::shared_ptr<const models::ModelParams> readClimbPlant(JsonObject& o, const s
 
 }  // namespace
 
-std::vector<std::string> builtinSpeciesNames() {
-  std::vector<std::string> names;
-  for (const EmbeddedFile& f : embeddedFiles()) {
-    std::string_view path = f.path;
-    // Species files of other models (e.g. "model": "particles") are not climbing species.
-    if (f.contents.find("\"model\": \"climb\"") == std::string_view::npos) continue;
-    if (path.rfind(kSpeciesDir, 0) == 0 && path.size() > 5 && path.substr(path.size() - 5) == ".json")
-      names.emplace_back(path.substr(kSpeciesDir.size(), path.size() - kSpeciesDir.size() - 5));
-  }
-  return names;
-}
+std::vector<std::string> builtinSpeciesNames() { return models::builtinSpeciesNames("climb"); }
 
 ClimbSpecies loadSpecies(const std::string& ref, const std::filesystem::path& baseDir, const std::string& source,
                          const std::string& pointer) {
-  bool isPath = ref.find('/') != std::string::npos || (ref.size() > 5 && ref.compare(ref.size() - 5, 5, ".json") == 0);
   ClimbSpecies s;
-  if (!isPath) {
-    const EmbeddedFile* f = findEmbeddedFile(std::string(kSpeciesDir) + ref + ".json");
-    if (!f)
-      throw Error(source, pointer,
-                  fmt::format("unknown species \"{}\" (built-in: {}; or give a path to a .json file)", ref,
-                              joinNames(builtinSpeciesNames())));
-    std::string name = "<built-in>/" + std::string(f->path);
-    readSpeciesDocument(parseJson(f->contents, name), name, "", s);
-    return s;
-  }
-  std::filesystem::path p = std::filesystem::path(ref).is_absolute() ? std::filesystem::path(ref) : baseDir / ref;
-  if (!std::filesystem::exists(p)) throw Error(source, pointer, fmt::format("species file {} does not exist", p.string()));
-  readSpeciesDocument(readJsonFile(p), p.string(), p.parent_path(), s);
+  readSpeciesDocument(models::loadSpeciesDocument("climb", ref, baseDir, source, pointer), s);
   return s;
 }
 

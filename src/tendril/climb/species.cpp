@@ -1,5 +1,7 @@
 #include "tendril/climb/species.h"
 
+#include "tendril/climb/species_schema.h"
+
 #include "tendril/core/json_reader.h"
 #include "tendril/plant/species_materials.h"
 
@@ -21,42 +23,103 @@ const char* ruleName(RuleKind kind) {
 }
 
 
+const schema::Schema<ClimbSpecies>& climbSpeciesSchema() {
+  using S = ClimbSpecies;
+  static const S d;  // the defaults are the struct's
+  static const schema::Schema<S> schema{
+      "climbing species",
+      {
+          schema::number<S>("segment_length", &S::segmentLength, d.segmentLength, 1e-4, 10.0, "m", "segment length",
+                            "length of a shoot's first internode segment"),
+          schema::number<S>("radius", &S::radius, d.radius, 1e-5, 1.0, "m", "radius", "radius of a shoot's first segment"),
+          schema::number<S>("leaf_size", &S::leafSize, d.leafSize, 0.0, 5.0, "m", "leaf size",
+                            "blade length of a shoot's first leaves"),
+          schema::number<S>("min_length", &S::minLength, d.minLength, 0.0, 10.0, "m", "min length",
+                            "a tip whose segments become shorter than this dies"),
+          schema::number<S>("min_radius", &S::minRadius, d.minRadius, 1e-6, 1.0, "m", "min radius",
+                            "radii never drop below this"),
+          schema::vec3<S>("branch_falloff", &S::branchFalloff, d.branchFalloff, 0.05, 1.0, "", "branch falloff",
+                          "a lateral shoot's start values (radius, length, leaf size) from its parent shoot's"),
+          schema::boolean<S>("pipe_model", &S::pipeModel, d.pipeModel, "pipe model",
+                             "thicken parents so that they carry their children"),
+          schema::number<S>("adhesion_distance", &S::adhesionDistance, d.adhesionDistance, 0.0, 10.0, "m",
+                            "adhesion distance", "a tip climbs when a surface is this close"),
+          schema::number<S>("surface_offset", &S::surfaceOffset, d.surfaceOffset, 1e-4, 1.0, "m", "surface offset",
+                            "segments keep at least this far from surfaces"),
+          schema::number<S>("surface_hold", &S::surfaceHold, d.surfaceHold, 0.0, 1.0, "", "surface hold",
+                            "probability that a tip about to leave every surface is bent back onto it"),
+          schema::integer<S>("max_unsupported", &S::maxUnsupported, d.maxUnsupported, 0, 1000000, "max unsupported",
+                             "a tip dies after this many segments in a row without support (0 = never)"),
+          schema::number<S>("crowding_radius", &S::crowdingRadius, d.crowdingRadius, 0.0, 10.0, "m", "crowding radius",
+                            "where segment ends are counted for crowding"),
+          schema::integer<S>("crowding_limit", &S::crowdingLimit, d.crowdingLimit, 1, 100000, "crowding limit",
+                             "segment ends within the crowding radius where tips die"),
+          schema::integer<S>("max_segments", &S::maxSegments, d.maxSegments, 1, 50000000, "max segments",
+                             "per plant; growth stops with a warning"),
+      }};
+  return schema;
+}
+
+const schema::Schema<ClimbSpecies>& climbTropismsSchema() {
+  using S = ClimbSpecies;
+  static const S d;
+  static const schema::Schema<S> schema{
+      "climbing species' tropisms",
+      {
+          schema::number<S>("gravity", &S::gravity, d.gravity, 0.0, 3.0, "", "gravity", "downward pull when not climbing"),
+          schema::number<S>("light", &S::light, d.light, 0.0, 3.0, "", "light", "pull toward the lights where exposed"),
+          schema::number<S>("light_ambient", &S::lightAmbient, d.lightAmbient, 0.0, 1.0, "", "light ambient",
+                            "fraction of the light pull kept in shade"),
+          schema::number<S>("random", &S::randomness, d.randomness, 0.0, 3.0, "", "random",
+                            "a random direction per segment"),
+          schema::number<S>("adhesion", &S::adhesion, d.adhesion, 0.0, 3.0, "", "adhesion",
+                            "toward the nearest surface, when climbing"),
+          schema::direction<S>("direction", &S::userDirection, d.userDirection, "direction",
+                               "a user direction (pseudo-tropism)"),
+          schema::number<S>("direction_strength", &S::userDirectionStrength, d.userDirectionStrength, 0.0, 3.0, "",
+                            "direction strength", "weight of the user direction"),
+          schema::number<S>("wind", &S::windStrength, d.windStrength, 0.0, 3.0, "", "wind",
+                            "along the scene's wind, per m/s of wind"),
+          schema::number<S>("attraction", &S::attraction, d.attraction, 0.0, 3.0, "", "attraction",
+                            "toward painted attractor strokes"),
+      }};
+  return schema;
+}
+
+const schema::Schema<ClimbSpecies>& climbDecreaseSchema() {
+  using S = ClimbSpecies;
+  static const S d;
+  static const schema::Schema<S> schema{
+      "climbing species' decrease",
+      {
+          schema::number<S>("radius", &S::decreaseRadius, d.decreaseRadius, 0.5, 1.0, "", "radius",
+                            "factor on the radius per decrease rule"),
+          schema::number<S>("length", &S::decreaseLength, d.decreaseLength, 0.5, 1.0, "", "length",
+                            "factor on the segment length per decrease rule"),
+          schema::number<S>("leaf_size", &S::decreaseLeafSize, d.decreaseLeafSize, 0.5, 1.0, "", "leaf size",
+                            "factor on the leaf size per decrease rule"),
+      }};
+  return schema;
+}
+
 void readClimbSpecies(JsonObject& o, ClimbSpecies& s, const std::string& baseDir) {
   s.name = o.string("name", s.name);
   s.description = o.string("description", s.description);
   o.markRead("model");  // the file's model tag, checked by the caller
 
-  s.segmentLength = o.numberf("segment_length", s.segmentLength, 1e-4, 10.0);
-  s.radius = o.numberf("radius", s.radius, 1e-5, 1.0);
-  s.leafSize = o.numberf("leaf_size", s.leafSize, 0.0, 5.0);
+  schema::readOver(o, climbSpeciesSchema(), s);
   if (auto d = o.optionalObject("decrease")) {
-    s.decreaseRadius = d->numberf("radius", s.decreaseRadius, 0.5, 1.0);
-    s.decreaseLength = d->numberf("length", s.decreaseLength, 0.5, 1.0);
-    s.decreaseLeafSize = d->numberf("leaf_size", s.decreaseLeafSize, 0.5, 1.0);
+    schema::readOver(*d, climbDecreaseSchema(), s);
     d->finish();
   }
-  s.minLength = o.numberf("min_length", s.minLength, 0.0, 10.0);
-  s.minRadius = o.numberf("min_radius", s.minRadius, 1e-6, 1.0);
-  s.branchFalloff = o.vec3("branch_falloff", s.branchFalloff, 0.05, 1.0);
-  s.pipeModel = o.boolean("pipe_model", s.pipeModel);
-
   if (auto t = o.optionalObject("tropisms")) {
-    s.gravity = t->numberf("gravity", s.gravity, 0.0, 3.0);
-    s.light = t->numberf("light", s.light, 0.0, 3.0);
-    s.lightAmbient = t->numberf("light_ambient", s.lightAmbient, 0.0, 1.0);
-    s.randomness = t->numberf("random", s.randomness, 0.0, 3.0);
-    s.adhesion = t->numberf("adhesion", s.adhesion, 0.0, 3.0);
-    s.userDirection = t->direction("direction", s.userDirection);
-    s.userDirectionStrength = t->numberf("direction_strength", s.userDirectionStrength, 0.0, 3.0);
-    s.windStrength = t->numberf("wind", s.windStrength, 0.0, 3.0);
-    s.attraction = t->numberf("attraction", s.attraction, 0.0, 3.0);
+    schema::readOver(*t, climbTropismsSchema(), s);
+    s.userDirection = s.userDirection.normalized();  // as written there; used normalised
     t->finish();
   }
-  s.adhesionDistance = o.numberf("adhesion_distance", s.adhesionDistance, 0.0, 10.0);
+  // Angles convert in float here (as the presets always have); they are not in the
+  // descriptions, whose angles convert in double.
   s.releaseAngle = o.angle("release_angle", degrees(s.releaseAngle), 0.0, 180.0);
-  s.surfaceOffset = o.numberf("surface_offset", s.surfaceOffset, 1e-4, 1.0);
-  s.surfaceHold = o.numberf("surface_hold", s.surfaceHold, 0.0, 1.0);
-  s.maxUnsupported = int(o.integer("max_unsupported", s.maxUnsupported, 0, 1000000));
 
   if (const Json* v = o.find("branch_angle")) {
     if (!v->is_array() || v->size() != 2 || !(*v)[0].is_number() || !(*v)[1].is_number())
@@ -67,8 +130,6 @@ void readClimbSpecies(JsonObject& o, ClimbSpecies& s, const std::string& baseDir
     s.branchAngleMin = radians(float(lo));
     s.branchAngleMax = radians(float(hi));
   }
-  s.crowdingRadius = o.numberf("crowding_radius", s.crowdingRadius, 0.0, 10.0);
-  s.crowdingLimit = int(o.integer("crowding_limit", s.crowdingLimit, 1, 100000));
 
   if (auto l = o.optionalObject("leaf")) {
     plant::readLeafShapes(*l, s.leafShapes, baseDir);
@@ -102,7 +163,6 @@ void readClimbSpecies(JsonObject& o, ClimbSpecies& s, const std::string& baseDir
       s.rules.push_back(rule);
     }
   }
-  s.maxSegments = int(o.integer("max_segments", s.maxSegments, 1, 50000000));
 }
 
 }  // namespace tendril::climb

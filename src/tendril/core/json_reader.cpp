@@ -1,5 +1,7 @@
 #include "tendril/core/json_reader.h"
 
+#include "tendril/core/schema.h"
+
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -173,20 +175,13 @@ Error JsonObject::error(const std::string& message) const {
   return Error(source_, pointer_.empty() ? "/" : pointer_, message);
 }
 
-static std::string rangeText(double min, double max) {
-  if (std::isinf(min) && std::isinf(max)) return "";
-  if (std::isinf(max)) return fmt::format("at least {}", min);
-  if (std::isinf(min)) return fmt::format("at most {}", max);
-  return fmt::format("in [{}, {}]", min, max);
-}
-
 double JsonObject::number(std::string_view key, double fallback, double min, double max) {
   const Json* v = find(key);
   if (!v) return fallback;
   if (!v->is_number()) throw error(key, "expected a number, got " + describeJson(*v));
   double d = v->get<double>();
   if (!std::isfinite(d) || d < min || d > max)
-    throw error(key, fmt::format("must be {}, got {}", rangeText(min, max), v->dump()));
+    throw error(key, fmt::format("must be {}, got {}", schema::rangeText(min, max), v->dump()));
   return d;
 }
 
@@ -260,7 +255,7 @@ Vec3 JsonObject::parseVec3(std::string_view key, const Json& v, double min, doub
     double d = v[i].get<double>();
     if (!std::isfinite(d) || d < min || d > max)
       throw Error(source_, pointerTo(key) + "/" + std::to_string(i),
-                  fmt::format("must be {}, got {}", rangeText(min, max), v[i].dump()));
+                  fmt::format("must be {}, got {}", schema::rangeText(min, max), v[i].dump()));
     out[i] = static_cast<float>(d);
   }
   return out;
@@ -289,7 +284,7 @@ Vec2 JsonObject::vec2(std::string_view key, const Vec2& fallback, double min, do
     if (!e.is_number()) throw Error(source_, p, "expected a number, got " + describeJson(e));
     double d = e.get<double>();
     if (!std::isfinite(d) || d < min || d > max)
-      throw Error(source_, p, fmt::format("must be {}, got {}", rangeText(min, max), e.dump()));
+      throw Error(source_, p, fmt::format("must be {}, got {}", schema::rangeText(min, max), e.dump()));
     out[i] = static_cast<float>(d);
   }
   return out;
@@ -317,7 +312,7 @@ std::vector<float> JsonObject::numberArray(std::string_view key, double min, dou
     if (!e.is_number()) throw Error(source_, p, "expected a number, got " + describeJson(e));
     double d = e.get<double>();
     if (!std::isfinite(d) || d < min || d > max)
-      throw Error(source_, p, fmt::format("must be {}, got {}", rangeText(min, max), e.dump()));
+      throw Error(source_, p, fmt::format("must be {}, got {}", schema::rangeText(min, max), e.dump()));
     out.push_back(static_cast<float>(d));
   }
   return out;

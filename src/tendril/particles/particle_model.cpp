@@ -1,23 +1,21 @@
 #include "tendril/particles/particle_model.h"
 
-#include "tendril/core/embedded.h"
 #include "tendril/core/error.h"
+#include "tendril/models/species_presets.h"
+#include "tendril/particles/species_schema.h"
 
 #include <fmt/format.h>
-#include <algorithm>
 #include <nlohmann/json.hpp>
+
+#include <algorithm>
 
 namespace tendril::particles {
 
 namespace {
 
-void readSpeciesDocument(const Json& json, const std::string& source, const std::filesystem::path& dir,
-                         ParticleSpecies& s) {
-  JsonObject o(json, source);
-  std::string model = o.string("model", "");
-  if (model != "particles")
-    throw o.error("model", fmt::format("this species is for the \"{}\" model, not \"particles\"", model));
-  readParticleSpecies(o, s, dir.string());
+void readSpeciesDocument(const models::SpeciesDocument& d, ParticleSpecies& s) {
+  JsonObject o(d.json, d.source);
+  readParticleSpecies(o, s, d.dir.string());  // its "model" was checked by the loader
   o.finish();
 }
 
@@ -44,32 +42,8 @@ std::shared_ptr<const models::ModelParams> readParticlePlant(JsonObject& o, cons
 
 ParticleSpecies loadSpecies(const std::string& ref, const std::filesystem::path& baseDir, const std::string& source,
                             const std::string& pointer) {
-  bool isPath = ref.find('/') != std::string::npos || (ref.size() > 5 && ref.compare(ref.size() - 5, 5, ".json") == 0);
   ParticleSpecies s;
-  if (!isPath) {
-    const EmbeddedFile* f = findEmbeddedFile("species/" + ref + ".json");
-    if (!f) {
-      std::string names;
-      for (const EmbeddedFile& e : embeddedFiles()) {
-        if (e.path.rfind("species/", 0) != 0) continue;
-        if (e.contents.find("\"model\": \"particles\"") == std::string_view::npos) continue;
-        names += (names.empty() ? "" : ", ") + std::string(e.path.substr(8, e.path.size() - 13));
-      }
-      throw Error(source, pointer,
-                  fmt::format("unknown particle species \"{}\" (built-in: {}; or give a path to a .json file)", ref,
-                              names));
-    }
-    std::string name = "<built-in>/" + std::string(f->path);
-    try {
-      readSpeciesDocument(parseJson(f->contents, name), name, "", s);
-    } catch (const Error& e) {
-      throw Error(source, pointer, e.what());
-    }
-    return s;
-  }
-  std::filesystem::path p = std::filesystem::path(ref).is_absolute() ? std::filesystem::path(ref) : baseDir / ref;
-  if (!std::filesystem::exists(p)) throw Error(source, pointer, fmt::format("species file {} does not exist", p.string()));
-  readSpeciesDocument(readJsonFile(p), p.string(), p.parent_path(), s);
+  readSpeciesDocument(models::loadSpeciesDocument("particles", ref, baseDir, source, pointer), s);
   return s;
 }
 
@@ -153,27 +127,20 @@ std::string ParticlePlantSystem::settingsTitle(size_t plant) const {
 std::vector<models::LiveSettings::Setting> ParticlePlantSystem::liveSettings(size_t plant) const {
   const ParticleSpecies& s = world_.species(uint32_t(plant));
   std::vector<Setting> out;
-  auto add = [&](const char* group, const char* label, const char* key, double value, double lo, double hi,
-                 int decimals = 3, bool integer = false) {
-    out.push_back(Setting{key, label, group, integer, value, lo, hi, decimals});
+  // Labels, units and slider ranges from the species' description (species_schema.h).
+  auto add = [&](const char* group, std::string_view key, int decimals = 3) {
+    const schema::Field<ParticleSpecies>& f = particleSpeciesSchema().at(key);
+    out.push_back(Setting{std::string(key), f.labelWithUnit(), group, f.kind == schema::Kind::Integer,
+                          schema::fileValue(f, s), f.sliderLow(), f.sliderHigh(), decimals});
   };
-  const char* table2 = "Table 2 of seed 000";
-  add(table2, "B lateral buds", "lateral_buds", s.maxLateralBuds, 0, 8, 0, true);
-  add(table2, "BP branch probability", "branch_probability", s.branchProbability, 0, 1);
-  add(table2, "V branch variance", "branch_variance", s.branchVariance, 0, 1);
-  add(table2, "Ph phototropism", "phototropism", s.phototropism, 0, 2);
-  add("growth", "growth rate (m/s)", "growth_rate", s.growthRate, 0, 0.1, 4);
-  add("growth", "growth speed", "growth_speed", s.growthSpeed, 0, 100, 1);
-  add("growth", "particle length (m)", "particle_length", s.particleLength, 0.005, 0.5);
-  add("growth", "surface adaption", "surface_adaption", s.surfaceAdaption, 0, 1);
-  add("growth", "random walk", "random_walk", s.randomWalk, 0, 1);
-  add("growth", "attraction", "attraction", s.attraction, 0, 5);
-  add("growth", "spreading", "spreading", s.spreading, 0, 5);
-  add("mechanics", "stiffness", "stiffness", s.stiffness, 0, 1);
-  add("mechanics", "break threshold", "break_threshold", s.breakThreshold, 0, 1);
-  add("mechanics", "max strain", "max_strain", s.maxStrain, 0.01, 2);
-  add("mechanics", "anchor strength", "anchor_strength", s.anchorStrength, 0, 0.99);
-  add("mechanics", "damping", "damping", s.damping, 0, 1);
+  for (std::string_view key : {"lateral_buds", "branch_probability", "branch_variance", "phototropism"})
+    add("Table 2 of seed 000", key);
+  add("growth", "growth_rate", 4);
+  add("growth", "growth_speed", 1);
+  for (std::string_view key : {"particle_length", "surface_adaption", "random_walk", "attraction", "spreading"})
+    add("growth", key);
+  for (std::string_view key : {"stiffness", "break_threshold", "max_strain", "anchor_strength", "damping"})
+    add("mechanics", key);
   return out;
 }
 

@@ -6,6 +6,7 @@
 #include "tendril/env/mesh_import.h"
 #include "tendril/env/primitives.h"
 #include "tendril/models/registry.h"
+#include "tendril/scene/settings_schema.h"
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
@@ -16,20 +17,13 @@ namespace tendril::scene {
 
 namespace {
 
-RigidTransform readTransform(JsonObject& o) {
-  RigidTransform t;
-  t.translation = o.vec3("position", Vec3::Zero());
-  t.rotation = quatFromEulerDegrees(o.vec3("rotation", Vec3::Zero(), -3600.0, 3600.0));
-  return t;
-}
-
 env::ObstacleDef readObstacle(JsonObject& o, const std::filesystem::path& baseDir, size_t index) {
   env::ObstacleDef d;
   std::string type = o.choice("type", "", {"plane", "box", "sphere", "cylinder", "wall", "mesh"});
   if (!o.has("type")) throw o.error("type", "is required: one of plane, box, sphere, cylinder, wall, mesh");
   d.name = o.string("name", fmt::format("{}{}", type, index));
   d.source = o.source();
-  d.worldFromLocal = readTransform(o);
+  d.worldFromLocal = readTransform(o, true);
   d.color = o.vec3("color", d.color, 0.0, 1.0);
   d.sdfCell = o.numberf("sdf_cell", 0.0f, 0.0, 10.0);
   if (type == "plane") {
@@ -81,24 +75,6 @@ env::ObstacleDef readObstacle(JsonObject& o, const std::filesystem::path& baseDi
   return d;
 }
 
-env::Light readLight(JsonObject& o) {
-  env::Light l;
-  std::string type = o.choice("type", "directional", {"directional", "point"});
-  if (type == "directional") {
-    l.type = env::Light::Type::Directional;
-    l.direction = o.direction("direction", Vec3(-0.3f, -1.0f, -0.4f));
-  } else {
-    l.type = env::Light::Type::Point;
-    if (!o.has("position")) throw o.error("position", "is required for a point light");
-    l.position = o.vec3("position", Vec3::Zero());
-  }
-  l.intensity = o.numberf("intensity", 1.0f, 0.0, 1e6);
-  l.angularRadius = o.angle("angle", 0.0f, 0.0, 45.0);
-  l.samples = int(o.integer("samples", l.angularRadius > 0.0f ? 8 : 1, 1, 256));
-  o.finish();
-  return l;
-}
-
 wind::SphSettings readSph(JsonObject& o, bool* fill) {
   wind::SphSettings s;
   s.domainMin = o.requiredVec3("domain_min");
@@ -126,55 +102,6 @@ wind::SphSettings readSph(JsonObject& o, bool* fill) {
   }
   s.maxParticles = size_t(o.integer("max_particles", int64_t(s.maxParticles), 1, 100'000'000));
   *fill = o.boolean("fill", true);
-  o.finish();
-  return s;
-}
-
-env::WindSettings readWind(JsonObject& o) {
-  env::WindSettings w;
-  std::string mode = o.choice("mode", "constant", {"constant", "gusty", "sph"});
-  w.mode = mode == "gusty" ? env::WindMode::Gusty : mode == "sph" ? env::WindMode::Sph : env::WindMode::Constant;
-  w.velocity = o.vec3("velocity", w.velocity, -200.0, 200.0);
-  w.gustStrength = o.numberf("gust_strength", w.gustStrength, 0.0, 1.0);
-  w.gustPeriod = o.numberf("gust_period", w.gustPeriod, 0.05, 3600.0);
-  w.gustScale = o.numberf("gust_scale", w.gustScale, 0.01, 1e4);
-  w.gustTurn = o.angle("gust_turn", degrees(w.gustTurn), 0.0, 90.0);
-  w.seed = o.seed("seed", w.seed);
-  for (JsonObject& e : o.objectArray("emitters")) {
-    env::WindEmitter em;
-    em.position = e.requiredVec3("position");
-    em.direction = e.direction("direction", em.direction);
-    em.speed = e.numberf("speed", em.speed, 0.0, 200.0);
-    em.radius = e.numberf("radius", em.radius, 0.001, 100.0);
-    em.reach = e.numberf("reach", em.reach, 0.01, 1e4);
-    em.spread = e.angle("spread", degrees(em.spread), 0.0, 45.0);
-    em.rate = e.numberf("rate", em.rate, 0.0, 1e7);
-    e.finish();
-    w.emitters.push_back(em);
-  }
-  return w;
-}
-
-env::Stroke readStroke(JsonObject& o) {
-  env::Stroke s;
-  std::string kind = o.choice("kind", "attract", {"attract", "repel"});
-  s.attract = kind == "attract";
-  s.radius = o.numberf("radius", 0.3f, 1e-4, 1e3);
-  s.strength = o.numberf("strength", 1.0f, 0.0, 100.0);
-  const Json* pts = o.find("points");
-  if (!pts || !pts->is_array() || pts->empty())
-    throw o.error("points", "is required: a non-empty array of [x, y, z] points");
-  for (size_t i = 0; i < pts->size(); ++i) {
-    const Json& p = (*pts)[i];
-    std::string ptr = o.pointerTo("points") + "/" + std::to_string(i);
-    if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number())
-      throw Error(o.source(), ptr, "expected [x, y, z], got " + describeJson(p));
-    Vec3 v(p[0].get<float>(), p[1].get<float>(), p[2].get<float>());
-    if (!isFinite(v) || v.cwiseAbs().maxCoeff() > JsonObject::kWorldExtent)
-      throw Error(o.source(), ptr,
-                  fmt::format("point must be finite and within {} m of the origin", JsonObject::kWorldExtent));
-    s.points.push_back(v);
-  }
   o.finish();
   return s;
 }
@@ -226,10 +153,17 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
         throw Error(source, obstacles[i].pointerTo("name"),
                     fmt::format("obstacle name \"{}\" is used twice", scene.obstacles.back().name));
     }
-    for (JsonObject& l : e->objectArray("lights")) scene.lights.push_back(readLight(l));
-    for (JsonObject& s : e->objectArray("strokes")) scene.strokes.push_back(readStroke(s));
+    for (JsonObject& l : e->objectArray("lights")) {
+      scene.lights.push_back(normalised(readLight(l)));
+      l.finish();
+    }
+    for (JsonObject& s : e->objectArray("strokes")) {
+      scene.strokes.push_back(readStroke(s));
+      s.finish();
+    }
     if (auto w = e->optionalObject("wind")) {
       scene.wind = readWind(*w);
+      for (env::WindEmitter& em : scene.wind.emitters) em = normalised(em);
       if (auto sph = w->optionalObject("sph")) {
         if (scene.wind.mode != env::WindMode::Sph) throw w->error("sph", "only applies with \"mode\": \"sph\"");
         scene.sph = readSph(*sph, &scene.sphFill);
@@ -248,18 +182,7 @@ Scene parseScene(const Json& json, const std::string& source, const std::filesys
       throw Error(source, plants[i].pointerTo("name"),
                   fmt::format("plant name \"{}\" is used twice", scene.plants.back().name));
   }
-  if (auto o = root.optionalObject("output")) {
-    scene.output.radialSegments = int(o->integer("radial_segments", scene.output.radialSegments, 3, 64));
-    scene.output.subdivisions = int(o->integer("subdivisions", scene.output.subdivisions, 1, 16));
-    scene.output.includeObstacles = o->boolean("include_obstacles", scene.output.includeObstacles);
-    if (auto a = o->optionalObject("wind_animation")) {
-      scene.output.animationSeconds = a->numberf("seconds", 4.0, 0.1, 600.0);
-      scene.output.animationFps = int(a->integer("fps", scene.output.animationFps, 1, 240));
-      scene.output.animationJoints = int(a->integer("joints", scene.output.animationJoints, 1, 1024));
-      a->finish();
-    }
-    o->finish();
-  }
+  if (auto o = root.optionalObject("output")) scene.output = readOutput(*o);
   root.finish();
   return scene;
 }

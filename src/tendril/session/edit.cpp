@@ -3,6 +3,7 @@
 
 #include "tendril/core/error.h"
 #include "tendril/models/registry.h"
+#include "tendril/scene/settings_schema.h"
 #include "tendril/session/session.h"
 
 #include <fmt/format.h>
@@ -18,11 +19,6 @@ namespace {
 
 Json vec3Json(const Vec3& v) { return Json::array({v.x(), v.y(), v.z()}); }
 
-// Angles are degrees in files (docs/edit-scripts.md); the conversion runs in double, so a
-// float survives the round trip exactly.
-double toDegrees(float radians) { return double(radians) * (180.0 / 3.14159265358979323846); }
-float fromDegrees(double degrees) { return float(degrees * (3.14159265358979323846 / 180.0)); }
-
 // A direction as written, not normalised: the edit normalises it when applied, so that an edit
 // read back from its own JSON is the same value (journals replay bit for bit).
 Vec3 readDirection(JsonObject& o, std::string_view key, const Vec3& fallback) {
@@ -34,46 +30,6 @@ Vec3 readDirection(JsonObject& o, std::string_view key, const Vec3& fallback) {
 uint32_t readIndex(JsonObject& o, std::string_view key) {
   if (!o.has(key)) throw o.error(key, "is required (an index, counting from 0)");
   return uint32_t(o.integer(key, 0, 0, std::numeric_limits<uint32_t>::max() - 1));
-}
-
-Json emitterJson(const env::WindEmitter& e) {
-  return Json{{"position", vec3Json(e.position)}, {"direction", vec3Json(e.direction)}, {"speed", e.speed},
-              {"radius", e.radius},                {"reach", e.reach},                    {"spread", toDegrees(e.spread)},
-              {"rate", e.rate}};
-}
-
-env::WindEmitter readEmitter(JsonObject& o) {
-  env::WindEmitter e;
-  if (!o.has("position")) throw o.error("position", "is required (the emitter's centre, [x, y, z] in m)");
-  e.position = o.vec3("position", e.position);
-  e.direction = readDirection(o, "direction", e.direction);
-  e.speed = o.numberf("speed", e.speed, 0.0, 1000.0);
-  e.radius = o.numberf("radius", e.radius, 1e-4, 1000.0);
-  e.reach = o.numberf("reach", e.reach, 0.0, 1e6);
-  e.spread = fromDegrees(o.number("spread", toDegrees(e.spread), 0.0, 89.0));
-  e.rate = o.numberf("rate", e.rate, 0.0, 1e9);
-  return e;
-}
-
-Json lightJson(const env::Light& l) {
-  return Json{{"type", l.type == env::Light::Type::Point ? "point" : "directional"},
-              {"position", vec3Json(l.position)},
-              {"direction", vec3Json(l.direction)},
-              {"intensity", l.intensity},
-              {"angular_radius", toDegrees(l.angularRadius)},
-              {"samples", l.samples}};
-}
-
-env::Light readLight(JsonObject& o) {
-  env::Light l;
-  l.type = o.choice("type", "directional", {"directional", "point"}) == "point" ? env::Light::Type::Point
-                                                                                : env::Light::Type::Directional;
-  l.position = o.vec3("position", l.position);
-  l.direction = readDirection(o, "direction", l.direction);
-  l.intensity = o.numberf("intensity", l.intensity, 0.0, 1e6);
-  l.angularRadius = fromDegrees(o.number("angular_radius", 0.0, 0.0, 45.0));
-  l.samples = int(o.integer("samples", l.samples, 1, 256));
-  return l;
 }
 
 // "scale": a number (uniform) or [x, y, z]; each factor in [1e-4, 1e4].
@@ -88,27 +44,6 @@ Vec3 readScale(JsonObject& o, std::string_view key) {
 Json scaleJson(const Vec3& s) {
   if (s.x() == s.y() && s.y() == s.z()) return s.x();
   return vec3Json(s);
-}
-
-// "translation" [x, y, z] and "rotation" as a unit quaternion [w, x, y, z].
-RigidTransform readTransform(JsonObject& o) {
-  RigidTransform t;
-  t.translation = o.vec3("translation", Vec3::Zero());
-  if (const Json* r = o.find("rotation")) {
-    if (!r->is_array() || r->size() != 4 || !(*r)[0].is_number() || !(*r)[1].is_number() || !(*r)[2].is_number() ||
-        !(*r)[3].is_number())
-      throw o.error("rotation", "expected a quaternion [w, x, y, z], got " + describeJson(*r));
-    Quat q((*r)[0].get<float>(), (*r)[1].get<float>(), (*r)[2].get<float>(), (*r)[3].get<float>());
-    if (!(std::abs(q.norm() - 1.0f) < 1e-3f)) throw o.error("rotation", "is not a unit quaternion [w, x, y, z]");
-    t.rotation = q;
-  }
-  return t;
-}
-
-void writeTransform(Json& j, const RigidTransform& t) {
-  const Quat& q = t.rotation;
-  j["translation"] = vec3Json(t.translation);
-  j["rotation"] = Json::array({q.w(), q.x(), q.y(), q.z()});
 }
 
 template <class... F>
@@ -143,21 +78,23 @@ void requireFinite(const Vec3& v, const char* what, const char* key) {
 
 // A transform an edit can apply: finite, with a normalised rotation.
 RigidTransform checkedTransform(RigidTransform t, const char* what) {
-  requireFinite(t.translation, what, "translation");
+  requireFinite(t.translation, what, "position");
   const float n = t.rotation.norm();
   if (!(n > 1e-6f) || !std::isfinite(n)) throw Error(what, "/rotation", "is not a rotation");
   t.rotation.normalize();
   return t;
 }
 
-env::WindEmitter checkedEmitter(env::WindEmitter e, const char* what) {
-  requireFinite(e.position, what, "position");
-  requireFinite(e.direction, what, "direction");
-  if (e.direction.squaredNorm() == 0.0f) throw Error(what, "/direction", "must not be zero");
-  e.direction.normalize();
-  if (!(e.speed >= 0.0f) || !(e.radius > 0.0f) || !(e.reach >= 0.0f) || !(e.spread >= 0.0f) || !(e.rate >= 0.0f))
-    throw Error(what, "", "speed, reach, spread and rate must be >= 0 and the radius > 0");
-  return e;
+// A settings check's "/key: message" (scene/settings_schema.h) as the edit's Error.
+Error settingsError(const char* what, const std::string& bad) {
+  const size_t colon = bad.find(": ");
+  return Error(what, bad.substr(0, colon), bad.substr(colon + 2));
+}
+
+// A value an edit can apply: within the limits the readers apply, its direction normalised.
+env::WindEmitter checkedEmitter(const env::WindEmitter& e, const char* what) {
+  if (auto bad = scene::checkEmitter(e)) throw settingsError(what, *bad);
+  return scene::normalised(e);
 }
 
 std::string plantKeyFor(const std::string& model) {
@@ -228,12 +165,7 @@ void applyTo(Session& s, const Edit& edit, Editor& editor, Editor::Drag& drag) {
           },
           [&](const PaintStroke& e) {
             const env::Stroke& st = e.stroke;
-            if (st.points.empty()) throw Error("paint_stroke", "/points", "a stroke needs at least one point");
-            for (const Vec3& p : st.points) requireFinite(p, "paint_stroke", "points");
-            if (!(st.radius > 0.0f) || !std::isfinite(st.radius))
-              throw Error("paint_stroke", "/radius", "must be a positive number of metres");
-            if (!(st.strength >= 0.0f) || !std::isfinite(st.strength))
-              throw Error("paint_stroke", "/strength", "must be a finite number >= 0");
+            if (auto bad = scene::checkStroke(st)) throw settingsError("paint_stroke", *bad);
             env.addStroke(st);
             s.environmentChanged();
             // An attracting stroke near a full-grown branch seeds a branch there, toward the
@@ -272,13 +204,8 @@ void applyTo(Session& s, const Edit& edit, Editor& editor, Editor::Drag& drag) {
             if (e.light >= lights.size())
               throw Error("move_light", "/light",
                           fmt::format("there is no light {} (the scene has {})", e.light, lights.size()));
-            env::Light l = e.value;
-            requireFinite(l.position, "move_light", "position");
-            requireFinite(l.direction, "move_light", "direction");
-            if (l.direction.squaredNorm() == 0.0f) throw Error("move_light", "/direction", "must not be zero");
-            l.direction.normalize();
-            if (l.samples < 1) throw Error("move_light", "/samples", "must be at least 1");
-            lights[e.light] = l;
+            if (auto bad = scene::checkLight(e.value)) throw settingsError("move_light", *bad);
+            lights[e.light] = scene::normalised(e.value);
             env.setLights(std::move(lights));
           },
           [&](const AddEmitter& e) {
@@ -401,32 +328,27 @@ Json editToJson(const Edit& edit) {
                  },
                  [&](const DragMove& e) { j["target"] = vec3Json(e.target); },
                  [&](const DragEnd&) {},
-                 [&](const PaintStroke& e) {
-                   j["attract"] = e.stroke.attract, j["radius"] = e.stroke.radius, j["strength"] = e.stroke.strength;
-                   Json pts = Json::array();
-                   for (const Vec3& p : e.stroke.points) pts.push_back(vec3Json(p));
-                   j["points"] = pts;
-                 },
+                 [&](const PaintStroke& e) { j.update(scene::strokeJson(e.stroke)); },
                  [&](const MoveObstacle& e) {
                    j["obstacle"] = e.obstacle;
-                   writeTransform(j, e.worldFromLocal);
+                   scene::writeTransform(j, e.worldFromLocal);
                    if (e.scale) j["scale"] = scaleJson(*e.scale);
                  },
                  [&](const AddObstacle& e) {
                    j["path"] = e.path;
                    if (!e.name.empty()) j["name"] = e.name;
-                   writeTransform(j, e.worldFromLocal);
+                   scene::writeTransform(j, e.worldFromLocal);
                    j["scale"] = scaleJson(e.scale);
                    j["color"] = vec3Json(e.color);
                  },
                  [&](const MoveLight& e) {
                    j["light"] = e.light;
-                   j.update(lightJson(e.value));
+                   j.update(scene::lightJson(e.value));
                  },
-                 [&](const AddEmitter& e) { j.update(emitterJson(e.emitter)); },
+                 [&](const AddEmitter& e) { j.update(scene::emitterJson(e.emitter)); },
                  [&](const EditEmitter& e) {
                    j["index"] = e.index;
-                   j.update(emitterJson(e.emitter));
+                   j.update(scene::emitterJson(e.emitter));
                  },
                  [&](const RemoveEmitter& e) { j["index"] = e.index; },
                  [&](const SetSpecies& e) { j["plant"] = e.plant, j["species"] = e.keys; },
@@ -495,31 +417,11 @@ Edit readEdit(JsonObject& o) {
     return e;
   }
   if (kind == "drag_end") return DragEnd{};
-  if (kind == "paint_stroke") {
-    PaintStroke e;
-    e.stroke.attract = o.boolean("attract", true);
-    e.stroke.radius = o.numberf("radius", e.stroke.radius, 1e-4, 1000.0);
-    e.stroke.strength = o.numberf("strength", e.stroke.strength, 0.0, 1e6);
-    const Json* pts = o.find("points");
-    if (!pts || !pts->is_array() || pts->empty())
-      throw o.error("points", "is required: a non-empty array of [x, y, z] points");
-    for (size_t i = 0; i < pts->size(); ++i) {
-      const Json& p = (*pts)[i];
-      const std::string ptr = o.pointerTo("points") + "/" + std::to_string(i);
-      if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() || !p[2].is_number())
-        throw Error(o.source(), ptr, "expected [x, y, z], got " + describeJson(p));
-      Vec3 v(p[0].get<float>(), p[1].get<float>(), p[2].get<float>());
-      if (!isFinite(v) || v.cwiseAbs().maxCoeff() > JsonObject::kWorldExtent)
-        throw Error(o.source(), ptr,
-                    fmt::format("point must be finite and within {} m of the origin", JsonObject::kWorldExtent));
-      e.stroke.points.push_back(v);
-    }
-    return e;
-  }
+  if (kind == "paint_stroke") return PaintStroke{scene::readStroke(o)};
   if (kind == "move_obstacle") {
     MoveObstacle e;
     e.obstacle = readIndex(o, "obstacle");
-    e.worldFromLocal = readTransform(o);
+    e.worldFromLocal = scene::readTransform(o, false);
     if (o.has("scale")) e.scale = readScale(o, "scale");
     return e;
   }
@@ -528,7 +430,7 @@ Edit readEdit(JsonObject& o) {
     if (!o.has("path")) throw o.error("path", "is required: the mesh file (.obj, .ply, .stl, .gltf, .glb...)");
     e.path = o.requiredString("path");
     e.name = o.string("name", "");
-    e.worldFromLocal = readTransform(o);
+    e.worldFromLocal = scene::readTransform(o, false);
     e.scale = readScale(o, "scale");
     e.color = o.vec3("color", e.color, 0.0, 1.0);
     return e;
@@ -536,14 +438,14 @@ Edit readEdit(JsonObject& o) {
   if (kind == "move_light") {
     MoveLight e;
     e.light = readIndex(o, "light");
-    e.value = readLight(o);
+    e.value = scene::readLight(o);
     return e;
   }
-  if (kind == "add_emitter") return AddEmitter{readEmitter(o)};
+  if (kind == "add_emitter") return AddEmitter{scene::readEmitter(o)};
   if (kind == "edit_emitter") {
     EditEmitter e;
     e.index = readIndex(o, "index");
-    e.emitter = readEmitter(o);
+    e.emitter = scene::readEmitter(o);
     return e;
   }
   if (kind == "remove_emitter") return RemoveEmitter{readIndex(o, "index")};

@@ -5,6 +5,7 @@
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
 #include "tendril/env/mesh_import.h"
+#include "tendril/scene/settings_schema.h"
 
 #include <fmt/format.h>
 
@@ -35,20 +36,8 @@ env::WindSettings loadWind(ArchiveReader& in) {
   w.gustStrength = in.f32(), w.gustPeriod = in.f32(), w.gustScale = in.f32(), w.gustTurn = in.f32();
   w.seed = in.u64();
   in.vector(w.emitters);
-  // The ranges the scene format allows for the wind (scene.cpp, readWind), and for emitters
-  // those of the scene format or of edit scripts (edit.cpp, readEmitter), whichever is wider.
-  auto within = [](float v, float lo, float hi) { return v >= lo && v <= hi; };
-  const float maxAngle = radians(90.0f) * 1.0001f;
-  if (!isFinite(w.velocity) || w.velocity.cwiseAbs().maxCoeff() > 200.0f || !within(w.gustStrength, 0.0f, 1.0f) ||
-      !within(w.gustPeriod, 0.05f, 3600.0f) || !within(w.gustScale, 0.01f, 1e4f) || !within(w.gustTurn, 0.0f, maxAngle))
-    in.fail(at, "the saved wind's settings are out of range");
-  const float extent = float(JsonObject::kWorldExtent);
-  for (const env::WindEmitter& e : w.emitters)
-    if (!isFinite(e.position) || e.position.cwiseAbs().maxCoeff() > extent || !isFinite(e.direction) ||
-        !(e.direction.norm() > 1e-6f) || e.direction.cwiseAbs().maxCoeff() > extent || !within(e.speed, 0.0f, 1000.0f) ||
-        !within(e.radius, 1e-4f, 1000.0f) || !within(e.reach, 0.0f, 1e6f) || !within(e.spread, 0.0f, maxAngle) ||
-        !within(e.rate, 0.0f, 1e9f))
-      in.fail(at, "a saved wind emitter is out of range");
+  // The limits the scene and edit readers apply (scene/settings_schema.h).
+  if (auto bad = scene::checkWind(w)) in.fail(at, "the saved wind is out of range: " + *bad);
   return w;
 }
 
@@ -334,7 +323,7 @@ uint32_t Session::importObstacle(const std::string& path, std::string name, cons
                 fmt::format("must be in [1e-4, 1e4] on every axis, got [{}, {}, {}]", scale.x(), scale.y(), scale.z()));
   if (!isFinite(worldFromLocal.translation) || !isFinite(Vec3(worldFromLocal.rotation.vec())) ||
       !std::isfinite(worldFromLocal.rotation.w()))
-    throw Error("", "/translation", "the obstacle's transform is not finite");
+    throw Error("", "/position", "the obstacle's transform is not finite");
   ImportedObstacle o;
   o.path = path;
   o.name = name.empty() ? std::filesystem::path(path).stem().string() : std::move(name);
@@ -486,27 +475,21 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
     in.vector(s.points);
   }
   env::WindSettings wind = loadWind(in);
-  // What the scene format would refuse is refused here too (scene.cpp): an obstacle moved past
-  // the world's extent, a light or stroke out of range. Edits only make such values from
-  // checked input.
+  // What the scene format would refuse is refused here too: an obstacle moved past the world's
+  // extent, a light or stroke out of range (the readers' own limits, scene/settings_schema.h).
+  // Edits only make such values from checked input.
   {
     auto near = [](const Vec3& p) { return isFinite(p) && p.cwiseAbs().maxCoeff() <= JsonObject::kWorldExtent; };
     auto unit = [](const Quat& q) { return std::isfinite(q.squaredNorm()) && std::abs(q.squaredNorm() - 1.0f) < 1e-2f; };
     for (size_t o = 0; o < obstacles; ++o)
       if (!near(transforms[o].translation) || !unit(transforms[o].rotation))
         in.fail(obstaclesAt, fmt::format("obstacle {} of the saved environment has a bad position or rotation", o));
-    for (const env::Light& l : lights)
-      if (uint32_t(l.type) > uint32_t(env::Light::Type::Point) || !near(l.position) || !near(l.direction) ||
-          !(l.direction.norm() > 1e-6f) || !(l.intensity >= 0.0f && l.intensity <= 1e6f) ||
-          !(l.angularRadius >= 0.0f && l.angularRadius <= radians(45.0f) * 1.0001f) || l.samples < 1 ||
-          l.samples > 256)
-        in.fail("a light of the saved environment is out of range");
-    for (const env::Stroke& st : strokes) {
-      bool ok = st.radius >= 1e-4f && st.radius <= 1e3f && st.strength >= 0.0f && st.strength <= 100.0f &&
-                !st.points.empty();
-      for (const Vec3& q : st.points) ok = ok && near(q);
-      if (!ok) in.fail("a painted stroke of the saved environment is out of range");
-    }
+    for (size_t i = 0; i < lights.size(); ++i)
+      if (auto bad = scene::checkLight(lights[i]))
+        in.fail(fmt::format("a light of the saved environment is out of range: /lights/{}{}", i, *bad));
+    for (size_t i = 0; i < strokes.size(); ++i)
+      if (auto bad = scene::checkStroke(strokes[i]))
+        in.fail(fmt::format("a painted stroke of the saved environment is out of range: /strokes/{}{}", i, *bad));
   }
 
   // Systems made afresh for the saved plants (seeded in an empty world: their seeds are not
