@@ -57,6 +57,13 @@ TEST(LSystemCli, RunTimeErrorsNameTheRuleAndExit2) {
   EXPECT_EQ(r.err, "tendril: error: " + (dir / "div.ls").string() +
                        ":3:22: division by zero in production `A(x) -> A(x - 1) B(1 / x)` (rewriting module 0, A(0), "
                        "in step 3)\n 3 | A(x) -> A(x - 1) B(1 / x)\n   |                      ^\n");
+  // Errors of the Start: block (run as the plant is seeded) keep their line and caret too.
+  writeText(dir / "start.ls", "derivation length: 2\nStart: { z = 0; y = 1 / z; }\naxiom: A\nA -> F A\n");
+  r = runTendril("lsys " + quoted(dir / "start.ls") + " -q -o " + quoted(dir / "x.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: " + (dir / "start.ls").string() +
+                       ":2:23: division by zero in the Start block\n 2 | Start: { z = 0; y = 1 / z; }\n   |     "
+                       "                  ^\n");
   writeText(dir / "big.ls", "max length: 100\nderivation length: 10\naxiom: A\nA -> A A\n");
   r = runTendril("lsys " + quoted(dir / "big.ls") + " -q -o " + quoted(dir / "x.glb"), dir);
   EXPECT_EQ(r.exitCode, 2);
