@@ -21,8 +21,7 @@ bool insideObstacle(const Environment& env, uint32_t id, const Vec3& p) {
   const ObstacleInfo& info = env.obstacle(id);
   if (!info.closed) return false;
   const Vec3 local = info.worldFromLocal.inverse().applyPoint(p);
-  Bounds3 bounds = info.localBounds;
-  if (!bounds.contains(local)) return false;
+  if (!info.localBounds.contains(local)) return false;
   const TriangleMesh mesh = env.obstacleMesh(id);
   WeldedMesh welded;
   welded.positions = mesh.positions;
