@@ -13,6 +13,7 @@
 #include "tendril/io/obj_writer.h"
 #include "tendril/plant/plant_model.h"
 #include "tendril/scene/scene.h"
+#include "tendril/session/plant_export.h"
 #include "tendril/session/session.h"
 #include "tendril/wind/sph.h"
 
@@ -50,9 +51,7 @@ int runGrow(const GrowOptions& o) {
   Timer total;
   session::Session session(std::move(scene));
   const scene::Scene& sc = session.scene();
-  io::ExportOptions options;
-  options.mesh.radialSegments = sc.output.radialSegments;
-  options.mesh.subdivisions = sc.output.subdivisions;
+  const io::ExportOptions options = session::exportOptions(sc.output);
 
   // Meshes the plants (and obstacles, if asked) once for both writers; `stem` names the files.
   std::vector<std::string> written;

@@ -1,17 +1,21 @@
 // tendril lsys GRAMMAR -o OUT.glb: derives an L-system grammar (docs/grammar.md) and writes
-// the plant its turtle draws. Errors inside the grammar print the one-line error and, under it,
-// the grammar line with a caret at the column.
+// the plant its turtle draws. It grows a one-plant scene (scene/one_plant_scene.h) through a
+// Session, so a scene holding the same plant grows the same one. Errors inside the grammar print
+// the one-line error and, under it, the grammar line with a caret at the column.
 #include "commands.h"
 
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
 #include "tendril/core/progress.h"
 #include "tendril/core/timer.h"
-#include "tendril/env/environment.h"
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
 #include "tendril/lsystem/lsystem.h"
+#include "tendril/lsystem/lsystem_model.h"
+#include "tendril/scene/one_plant_scene.h"
 #include "tendril/scene/scene.h"
+#include "tendril/session/plant_export.h"
+#include "tendril/session/session.h"
 
 #include <fmt/format.h>
 
@@ -32,7 +36,7 @@ struct LsysOptions {
   std::string at;
   std::string heading;
   bool print = false;
-  int radialSegments = 8;
+  int radialSegments = 0;  // 0: the scene's output.radial_segments (8 without a scene)
   CommonOptions common;
 };
 
@@ -52,6 +56,25 @@ std::pair<std::string, double> parseDefine(const std::string& text) {
   return {name, v};
 }
 
+// An Error the Session gave for the one plant, said as the command line and the grammar say it:
+// a start inside an obstacle is --at's; a run-time error of the grammar's Start: or axiom is
+// the grammar's own (file:line:col), so that its line is shown with a caret.
+Error commandLineError(const Error& e, const std::string& sceneSource, const lsystem::Grammar& grammar,
+                       const LsysOptions& o) {
+  if (e.source() != sceneSource) return e;
+  if (e.location() == "/plants/0/position")
+    return Error("command line", "--at",
+                 fmt::format("{} of {}; give --at x,y,z in front of a surface", e.message(), o.scene));
+  const std::string prefix = grammar.source + ":";
+  if (e.location() == "/plants/0/grammar" && e.message().starts_with(prefix)) {
+    std::string rest = e.message().substr(prefix.size());
+    if (rest.starts_with(" ")) return Error(grammar.source, "", rest.substr(1));
+    const size_t colon = rest.find(": ");
+    if (colon != std::string::npos) return Error(grammar.source, rest.substr(0, colon), rest.substr(colon + 2));
+  }
+  return e;
+}
+
 int runLsys(const LsysOptions& o) {
   applyCommonOptions(o.common);
   std::filesystem::path out(o.output);
@@ -65,74 +88,56 @@ int runLsys(const LsysOptions& o) {
   std::shared_ptr<const lsystem::Grammar> grammar =
       lsystem::loadGrammar(o.grammar, std::filesystem::current_path(), compile, "command line", "GRAMMAR");
 
-  // The environment the ?E queries see: a scene's obstacles, lights and strokes, or nothing.
-  env::Environment environment;
-  std::optional<scene::Scene> scene;
-  if (!o.scene.empty()) {
-    scene = scene::loadScene(o.scene);
-    scene::populateEnvironment(*scene, environment);
-  } else {
-    environment.commit();
-  }
-
-  lsystem::RunOptions run;
-  if (!o.at.empty()) run.start.position = parseVec3(o.at, "--at");
+  // The one-plant scene: the grammar standing at --at, its first heading --heading, seeded with
+  // --seed (default: the grammar's seed:), in the scene given (its environment, seed and output
+  // settings; not its plants) or in an empty one. A scene file holding this plant grows the
+  // same plant.
+  std::optional<scene::Scene> base;
+  if (!o.scene.empty()) base = scene::loadScene(o.scene);
+  models::PlantSpec plant;
+  plant.name = grammar->name.empty() ? std::filesystem::path(o.grammar).stem().string() : grammar->name;
+  if (!o.at.empty()) plant.position = parseVec3(o.at, "--at");
   if (!o.heading.empty()) {
     const Vec3 h = parseVec3(o.heading, "--heading");
     if (!(h.norm() > 1e-6f)) throw Error("command line", "--heading", "the heading must not be zero");
-    run.start.heading = h.normalized();
-    // Keep U (the side away from a support) perpendicular to the new heading.
-    Vec3 up = run.start.up - run.start.up.dot(run.start.heading) * run.start.heading;
-    if (up.norm() < 1e-3f) up = anyPerpendicular(run.start.heading);
-    run.start.up = up.normalized();
+    plant.direction = h.normalized();
   }
-  // The first few millimetres of growth must be outside every obstacle: a start on the ground
-  // is fine, one at the foot of a wall standing on it is not. (The exact query ties there, at a
-  // point on one surface and inside another; the distance grids do not.)
-  const Vec3 probe = run.start.position + 0.005f * run.start.heading;
-  if (scene && (environment.exactSignedDistance(probe, 1.0f) < 0.0f || environment.signedDistance(probe) < -1e-3f))
-    throw Error("command line", "--at",
-                fmt::format("the plant would start at ({:.3g}, {:.3g}, {:.3g}), inside an obstacle of {}; "
-                            "give --at x,y,z in front of a surface",
-                            run.start.position.x(), run.start.position.y(), run.start.position.z(), o.scene));
-  if (o.seed >= 0) run.seed = uint64_t(o.seed);
-  if (o.steps >= 0) run.derivationLength = int(o.steps);
-  lsystem::LSystem ls(grammar, run);
+  plant.seed = o.seed >= 0 ? uint64_t(o.seed) : grammar->seed;
+  std::optional<int> length;
+  if (o.steps >= 0) length = int(o.steps);
+  const int steps = length.value_or(grammar->derivationLength);
+  scene::Scene sc = scene::onePlantScene(lsystem::lsystemPlant(std::move(plant), grammar, length), steps, base);
+  if (o.radialSegments > 0) sc.output.radialSegments = o.radialSegments;
+  const std::string sceneSource = sc.source;
+  std::unique_ptr<session::Session> session;
+  try {
+    session = std::make_unique<session::Session>(std::move(sc));
+  } catch (const Error& e) {
+    throw commandLineError(e, sceneSource, *grammar, o);
+  }
+  auto derivation = [&] { return lsystem::derivationOf(session->system(0), session->indexInSystem(0)); };
   {
-    Progress progress("deriving", uint64_t(std::max(ls.derivationLength(), 0)), !o.common.quiet);
-    while (!ls.finished()) {
-      ls.step(&environment);
-      progress.update(ls.stepCount(), fmt::format("{} modules", ls.string().size()));
-    }
-    progress.finish(fmt::format("{} modules", ls.string().size()));
+    Progress progress("deriving", uint64_t(std::max(steps, 0)), !o.common.quiet);
+    session->run(uint32_t(std::max(steps, 0)), [&](uint32_t done) {
+      progress.update(done, fmt::format("{} modules", derivation()->string().size()));
+    });
+    progress.finish(fmt::format("{} modules", derivation()->string().size()));
   }
   double deriveSeconds = total.seconds();
+  const lsystem::LSystem& ls = *derivation();
   if (o.print) std::cout << ls.text() << "\n";
 
-  plant::PlantModel plant = ls.interpret();
-  plant.name = grammar->name.empty() ? std::filesystem::path(o.grammar).stem().string() : grammar->name;
-  plant::validate(plant, grammar->source);
-
-  io::ExportScene exportScene;
-  exportScene.plants.push_back(plant);
-  if (scene && scene->output.includeObstacles) {
-    for (uint32_t id = 0; id < environment.obstacleCount(); ++id) {
-      const env::ObstacleInfo& info = environment.obstacle(id);
-      io::NamedMesh m{info.name, environment.obstacleMesh(id), info.color};
-      for (Vec3& v : m.mesh.positions) v = info.worldFromLocal.applyPoint(v);
-      exportScene.meshes.push_back(std::move(m));
-    }
-  }
-  io::ExportOptions options;
-  options.mesh.radialSegments = o.radialSegments;
+  const io::ExportScene exportScene = session::exportScene(*session, grammar->source);
+  const io::ExportOptions options = session::exportOptions(session->scene().output);
   if (ext == ".glb") io::writeGlb(exportScene, out, options);
   else io::writeObj(exportScene, out, options);
 
   if (!o.common.quiet) {
-    plant::PlantStats s = plant::computeStats(plant);
+    const plant::PlantModel& p = exportScene.plants[0];
+    plant::PlantStats s = plant::computeStats(p);
     log::info("{}: {} steps, {} modules; {} segments, {} leaves, {} polygon meshes (derivation {:.2f} s, total "
               "{:.2f} s); wrote {}",
-              plant.name, ls.stepCount(), ls.string().size(), s.nodes, s.leaves, plant.meshes.size(), deriveSeconds,
+              p.name, ls.stepCount(), ls.string().size(), s.nodes, s.leaves, p.meshes.size(), deriveSeconds,
               total.seconds(), out.string());
   }
   return 0;
@@ -145,13 +150,17 @@ RegisterCommand registerLsys("lsys", "Derive an L-system grammar and write the p
   sub.add_option("-o,--output", o->output, "Output file: .glb or .obj")->required();
   sub.add_option("-n,--steps", o->steps, "Derivation steps (overrides the grammar's derivation length)")
       ->check(CLI::Range(0, 10000000));
-  sub.add_option("--seed", o->seed, "Random seed (overrides the grammar's seed:)")->check(CLI::NonNegativeNumber);
+  sub.add_option("--seed", o->seed, "The plant's seed, as a scene plant's \"seed\" (default: the grammar's seed:)")
+      ->check(CLI::Range(int64_t(0), int64_t(1) << 53));
   sub.add_option("-D,--define", o->defines, "Override a define: constant, NAME=NUMBER (repeatable)");
-  sub.add_option("--scene", o->scene, "Grow in this scene's environment (its obstacles, lights, strokes)");
+  sub.add_option("--scene", o->scene,
+                 "Grow in this scene in place of its plants (its obstacles, lights, strokes, wind, seed, output)");
   sub.add_option("--at", o->at, "Where the plant stands, x,y,z (m); default 0,0,0");
   sub.add_option("--heading", o->heading, "The turtle's first heading, x,y,z; default 0,1,0 (up)");
   sub.add_flag("--print", o->print, "Print the derived string");
-  sub.add_option("--radial-segments", o->radialSegments, "Vertices around each branch")->check(CLI::Range(3, 64));
+  sub.add_option("--radial-segments", o->radialSegments,
+                 "Vertices around each branch (overrides the scene's output.radial_segments; default 8)")
+      ->check(CLI::Range(3, 64));
   addCommonOptions(sub, o->common);
   return [o]() -> int {
     try {

@@ -1,17 +1,21 @@
 // tendril model GRAPH -o OUT.glb: expands a component graph (seed 004, docs/graph-format.md)
-// and writes the plant as .glb or .obj (by the output's extension).
+// and writes the plant as .glb or .obj (by the output's extension). It grows a one-plant scene
+// (scene/one_plant_scene.h) through a Session, so a scene holding the same plant gives the same
+// one.
 #include "commands.h"
 
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
 #include "tendril/core/timer.h"
-#include "tendril/graph/build_plant.h"
-#include "tendril/graph/expand.h"
 #include "tendril/graph/graph.h"
+#include "tendril/graph/graph_model.h"
 #include "tendril/io/atomic_file.h"
 #include "tendril/io/export_model.h"
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
+#include "tendril/scene/one_plant_scene.h"
+#include "tendril/session/plant_export.h"
+#include "tendril/session/session.h"
 
 #include <fmt/format.h>
 
@@ -42,20 +46,22 @@ int runModel(const ModelOptions& o) {
 
   Timer total;
   std::shared_ptr<const graph::Graph> g = graph::loadGraph(o.graph, overrides);
-  graph::ExpandOptions options;
-  options.seed = o.seed >= 0 ? uint64_t(o.seed) : g->seed;
+  // The one-plant scene: the graph at the origin, generated with --seed (default: the graph's
+  // "seed"), written with --radial-segments and --subdivisions as the scene's output settings.
+  // A scene file holding this plant gives the same plant.
+  models::PlantSpec plant;
+  plant.name = g->name;
+  plant.seed = o.seed >= 0 ? uint64_t(o.seed) : g->seed;
   Timer phase;
-  graph::ITree tree = graph::expand(g, options);
-  double expandSeconds = phase.seconds();
+  scene::Scene sc = scene::onePlantScene(graph::graphPlant(std::move(plant), g), 0);
+  sc.output.radialSegments = o.radialSegments;
+  sc.output.subdivisions = o.subdivisions;
+  session::Session session(std::move(sc));
+  double generateSeconds = phase.seconds();
   phase.reset();
-  io::ExportScene scene;
-  scene.plants.push_back(graph::buildPlant(tree));
-  double geometrySeconds = phase.seconds();
-  phase.reset();
-  io::ExportOptions exportOptions;
-  exportOptions.mesh.radialSegments = o.radialSegments;
-  exportOptions.mesh.subdivisions = o.subdivisions;
-  io::ExportModel model = io::buildExportModel(scene, exportOptions);
+  const io::ExportScene scene = session::exportScene(session, g->source);
+  // Meshed once: the triangle count is reported, and both writers take the meshes.
+  io::ExportModel model = io::buildExportModel(scene, session::exportOptions(session.scene().output));
   if (ext == ".glb")
     io::writeGlb(model, out);
   else
@@ -67,9 +73,9 @@ int runModel(const ModelOptions& o) {
     size_t triangles = 0;
     for (const mesh::PlantMesh& m : model.plantMeshes) triangles += m.triangleCount();
     log::info("{}: {} instances, {} skeleton segments, {} leaves, {} primitives, {} triangles", g->name,
-              tree.instances.size(), p.nodeCount(), p.leafCount(), p.primitives.size(), triangles);
-    log::info("expand {:.3f} s, geometry {:.3f} s, mesh + export {:.3f} s (total {:.3f} s); wrote {}", expandSeconds,
-              geometrySeconds, exportSeconds, total.seconds(), out.string());
+              session.plantSpec(0).paramsAs<graph::GraphPlantParams>()->instances, p.nodeCount(), p.leafCount(), p.primitives.size(), triangles);
+    log::info("expand + geometry {:.3f} s, mesh + export {:.3f} s (total {:.3f} s); wrote {}", generateSeconds,
+              exportSeconds, total.seconds(), out.string());
   }
   return 0;
 }
@@ -79,7 +85,8 @@ RegisterCommand registerModel("model", "Build a plant from a component graph (Xf
   auto o = std::make_shared<ModelOptions>();
   sub.add_option("graph", o->graph, "Graph file (JSON, see docs/graph-format.md)")->required();
   sub.add_option("-o,--output", o->output, "Output file: .glb or .obj (replaced atomically)")->required();
-  sub.add_option("--seed", o->seed, "Random seed (overrides the graph's \"seed\")")->check(CLI::NonNegativeNumber);
+  sub.add_option("--seed", o->seed, "Random seed, as a scene plant's \"seed\" (overrides the graph's \"seed\")")
+      ->check(CLI::Range(int64_t(0), int64_t(1) << 53));
   sub.add_option("--set", o->overrides,
                  "Parameter override component/parameter=value (JSON value, else an expression); repeatable");
   sub.add_option("--radial-segments", o->radialSegments, "Vertices around each stem")

@@ -8,6 +8,7 @@
 #include "tendril/io/obj_writer.h"
 #include "tendril/render/offscreen.h"
 #include "tendril/render/session_render.h"
+#include "tendril/session/plant_export.h"
 
 #include <fmt/format.h>
 
@@ -41,22 +42,8 @@ std::filesystem::path prepareOutputDir(const std::string& dir) {
 std::vector<std::string> writePlantFiles(const session::Session& session, const std::filesystem::path& outDir,
                                          const std::string& stem, const std::set<std::string>& formats,
                                          const std::string& source, io::ExportScene& exportScene) {
-  const scene::Scene& sc = session.scene();
-  io::ExportOptions options;
-  options.mesh.radialSegments = sc.output.radialSegments;
-  options.mesh.subdivisions = sc.output.subdivisions;
-  exportScene = io::ExportScene{};
-  exportScene.plants = session.plants();
-  for (const plant::PlantModel& p : exportScene.plants) plant::validate(p, source);
-  if (sc.output.includeObstacles) {
-    const env::Environment& env = session.environment();
-    for (uint32_t id = 0; id < env.obstacleCount(); ++id) {
-      const env::ObstacleInfo& info = env.obstacle(id);
-      io::NamedMesh m{info.name, env.obstacleMesh(id), info.color};
-      for (Vec3& v : m.mesh.positions) v = info.worldFromLocal.applyPoint(v);
-      exportScene.meshes.push_back(std::move(m));
-    }
-  }
+  const io::ExportOptions options = session::exportOptions(session.scene().output);
+  exportScene = session::exportScene(session, source);
   std::vector<std::string> written;
   if (formats.size() == 1 && formats.count("glb")) {
     // Alone, the .glb streams plant by plant (gltf_writer.h): less memory, and faster.

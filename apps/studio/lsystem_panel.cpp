@@ -2,9 +2,14 @@
 
 #include "tendril/core/error.h"
 #include "tendril/core/timer.h"
+#include "tendril/env/seed_check.h"
+#include "tendril/lsystem/lsystem_model.h"
+#include "tendril/session/grow_alone.h"
 
 #include <imgui.h>
 #include <imgui_stdlib.h>
+
+#include <algorithm>
 
 namespace tendril::studio {
 
@@ -37,16 +42,28 @@ void LSystemPanel::rebuild() {
     lsystem::CompileOptions options;
     options.dir = std::filesystem::path(source_).parent_path();
     auto grammar = lsystem::compileGrammar(text_, "editor", options);
-    lsystem::RunOptions run;
-    run.derivationLength = steps_;
-    // Beside the plant, so the preview and the growing plant can be compared.
-    run.start.position = position_ + Vec3(0.6f, 0.0f, 0.0f);
+    // The plant with the edited grammar, as the scene would grow it on its own (its seed, the
+    // scene's seed; session/grow_alone.h), beside the plant so that the two can be compared:
+    // at the first of a few places around it where it may start.
+    models::PlantSpec plant;
+    plant.name = "preview";
+    if (plant_ < session_->plantCount()) {
+      plant.direction = session_->plantSpec(plant_).direction;
+      plant.seed = session_->plantSpec(plant_).seed;
+    }
+    const env::Environment& env = session_->environment();
+    plant.position = position_ + Vec3(0.6f, 0.0f, 0.0f);
+    for (const Vec3& offset : {Vec3(-0.6f, 0.0f, 0.0f), Vec3(0.0f, 0.0f, 0.6f), Vec3(0.0f, 0.0f, -0.6f)}) {
+      if (!env::seedInsideObstacle(env, plant.position, plant.direction)) break;
+      plant.position = position_ + offset;
+    }
     Timer timer;
-    lsystem::LSystem ls(grammar, run);
-    while (!ls.finished() && ls.string().size() < kPreviewModuleLimit) ls.step(&session_->environment());
-    preview_ = ls.interpret();
-    preview_->name = "preview";
-    modules_ = ls.string().size();
+    auto modules = [](const models::PlantSystem& s) { return lsystem::derivationOf(s, 0)->string().size(); };
+    std::unique_ptr<models::PlantSystem> system =
+        session::growAlone(*session_, lsystem::lsystemPlant(std::move(plant), grammar, steps_), uint32_t(std::max(steps_, 0)),
+                           [&](const models::PlantSystem& s) { return modules(s) < kPreviewModuleLimit; });
+    preview_ = system->snapshot(0);
+    modules_ = modules(*system);
     deriveMs_ = timer.milliseconds();
   } catch (const Error& e) {
     error_ = e.what();

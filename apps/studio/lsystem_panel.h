@@ -1,7 +1,8 @@
 // The L-system editor panel: the grammar of the selected L-system plant as editable text,
 // compiled on every change with the parser's diagnostics shown inline (line excerpt and caret),
-// and a live re-derivation drawn in the viewport beside the plant as a preview. "Apply to
-// plant" hands back a SetGrammar edit for the studio to apply through the Editor (undoable).
+// and a live re-derivation drawn in the viewport beside the plant as a preview: the plant with
+// the edited grammar as the scene grows it (its seed, the scene's seed and environment). "Apply
+// to plant" hands back a SetGrammar edit for the studio to apply through the Editor (undoable).
 #pragma once
 
 #include "tendril/lsystem/lsystem.h"

@@ -8,6 +8,7 @@
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/image.h"
 #include "tendril/io/obj_writer.h"
+#include "tendril/session/plant_export.h"
 #include "tendril/session/session_file.h"
 
 #include <epoxy/gl.h>
@@ -102,13 +103,15 @@ void Studio::Impl::saveFile(const std::filesystem::path& path) {
 }
 
 void Studio::Impl::exportFile(const std::filesystem::path& path) {
-  io::ExportScene scene;
-  scene.plants = session->plants();
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  if (ext == ".glb") io::writeGlb(scene, path);
-  else if (ext == ".obj") io::writeObj(scene, path);
-  else throw Error(path.string(), "", "expected a .glb or .obj file name");
+  if (ext != ".glb" && ext != ".obj") throw Error(path.string(), "", "expected a .glb or .obj file name");
+  // As `tendril grow` writes them: the scene's output settings (radial segments, subdivisions,
+  // the obstacles when it asks for them).
+  const io::ExportScene scene = session::exportScene(*session, session->scene().source);
+  const io::ExportOptions options = session::exportOptions(session->scene().output);
+  if (ext == ".glb") io::writeGlb(scene, path, options);
+  else io::writeObj(scene, path, options);
   status = fmt::format("exported {} plant(s) to {}", scene.plants.size(), path.string());
   statusIsError = false;
 }

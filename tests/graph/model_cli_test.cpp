@@ -50,6 +50,41 @@ TEST(GraphCli, ModelWritesGlbAndObj) {
   EXPECT_LT(test::readText(dir / "d.glb").size(), bytes.size());
 }
 
+// `tendril model` grows the one-plant scene it names: a scene file holding that graph plant,
+// with the same seed, gives the same plant, byte for byte.
+TEST(GraphCli, ModelIsTheOnePlantSceneOfItsGraph) {
+  auto dir = test::scratchDir();
+  auto scene = [&](const std::string& name, const std::string& seed, const std::string& output) {
+    return R"({"tendril": 1, "output": {)" + output + R"(}, "plants": [{"name": ")" + name +
+           R"(", "model": "graph", "graph": ")" + (test::sourceDir() / "examples/graphs" / (name + ".json")).string() +
+           R"(", "position": [0, 0, 0])" + seed + "}]}";
+  };
+  auto r = runTendril("model " + example("agave") + " --seed 3 -q -o " + quoted(dir / "a.glb"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  test::writeText(dir / "scene.json", scene("agave", R"(, "seed": 3)", ""));
+  r = runTendril("grow " + quoted(dir / "scene.json") + " -q -o " + quoted(dir / "scene"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const std::string plant = test::readText(dir / "a.glb");
+  EXPECT_GT(plant.size(), 10000u);
+  EXPECT_TRUE(plant == test::readText(dir / "scene" / "plant.glb"));
+  r = runTendril("model " + example("agave") + " --seed 4 -q -o " + quoted(dir / "b.glb"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_FALSE(plant == test::readText(dir / "b.glb"));
+  // Without --seed, the graph's own; --radial-segments and --subdivisions are the scene's
+  // output settings.
+  r = runTendril("model " + example("sunflower") + " --radial-segments 5 --subdivisions 2 -q -o " + quoted(dir / "c.glb"),
+                 dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  test::writeText(dir / "coarse.json", scene("sunflower", "", R"("radial_segments": 5, "subdivisions": 2)"));
+  r = runTendril("grow " + quoted(dir / "coarse.json") + " -q -o " + quoted(dir / "coarse"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const std::string coarse = test::readText(dir / "c.glb");
+  EXPECT_TRUE(coarse == test::readText(dir / "coarse" / "plant.glb"));
+  r = runTendril("model " + example("sunflower") + " -q -o " + quoted(dir / "d.glb"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_LT(coarse.size(), test::readText(dir / "d.glb").size());
+}
+
 TEST(GraphCli, BadInputIsOneLineAndExitCodeTwo) {
   auto dir = test::scratchDir();
   test::writeText(dir / "typo.json", R"j({"tendril_graph": 1, "root": {"links": ["s"]},

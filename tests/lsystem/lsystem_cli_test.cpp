@@ -3,7 +3,10 @@
 #include "lsystem/lsystem_test_util.h"
 #include "support/run_command.h"
 
+#include "tendril/core/json_reader.h"
+
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 
@@ -54,6 +57,13 @@ TEST(LSystemCli, RunTimeErrorsNameTheRuleAndExit2) {
   EXPECT_EQ(r.err, "tendril: error: " + (dir / "div.ls").string() +
                        ":3:22: division by zero in production `A(x) -> A(x - 1) B(1 / x)` (rewriting module 0, A(0), "
                        "in step 3)\n 3 | A(x) -> A(x - 1) B(1 / x)\n   |                      ^\n");
+  // Errors of the Start: block (run as the plant is seeded) keep their line and caret too.
+  writeText(dir / "start.ls", "derivation length: 2\nStart: { z = 0; y = 1 / z; }\naxiom: A\nA -> F A\n");
+  r = runTendril("lsys " + quoted(dir / "start.ls") + " -q -o " + quoted(dir / "x.glb"), dir);
+  EXPECT_EQ(r.exitCode, 2);
+  EXPECT_EQ(r.err, "tendril: error: " + (dir / "start.ls").string() +
+                       ":2:23: division by zero in the Start block\n 2 | Start: { z = 0; y = 1 / z; }\n   |     "
+                       "                  ^\n");
   writeText(dir / "big.ls", "max length: 100\nderivation length: 10\naxiom: A\nA -> A A\n");
   r = runTendril("lsys " + quoted(dir / "big.ls") + " -q -o " + quoted(dir / "x.glb"), dir);
   EXPECT_EQ(r.exitCode, 2);
@@ -91,9 +101,9 @@ TEST(LSystemCli, AtPlacesThePlantInAScene) {
   auto r = runTendril("lsys japanese-ivy -n 60 --scene " + scene + " -o " + quoted(dir / "a.glb"), dir);
   EXPECT_EQ(r.exitCode, 2);
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
-  EXPECT_EQ(r.err.rfind("tendril: error: command line:--at: the plant would start at (0, 0, 0), inside an obstacle", 0),
-            0u)
-      << r.err;
+  EXPECT_EQ(r.err, "tendril: error: command line:--at: seed position (0, 0, 0) lies inside an obstacle of " +
+                       (tendril::test::sourceDir() / "examples/scenes/default.json").string() +
+                       "; give --at x,y,z in front of a surface\n");
   EXPECT_FALSE(std::filesystem::exists(dir / "a.glb"));
   // In front of the wall it climbs.
   r = runTendril("lsys japanese-ivy -n 60 --scene " + scene + " --at -1.1,0.02,0.15 -o " + quoted(dir / "b.glb"), dir);
@@ -105,6 +115,42 @@ TEST(LSystemCli, AtPlacesThePlantInAScene) {
   r = runTendril("lsys japanese-ivy --heading 0,0,0 -o " + quoted(dir / "c.glb"), dir);
   EXPECT_EQ(r.exitCode, 2);
   EXPECT_NE(r.err.find("command line:--heading: the heading must not be zero"), std::string::npos) << r.err;
+}
+
+// `tendril lsys` grows the one-plant scene it names: a scene file holding that plant, with the
+// same seed, gives the same plant, byte for byte.
+TEST(LSystemCli, IsTheOnePlantSceneOfItsGrammar) {
+  auto dir = scratchDir();
+  auto r = runTendril("lsys abop-1.27-stochastic --seed 3 -q -o " + quoted(dir / "a.glb"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  writeText(dir / "scene.json", R"({"tendril": 1, "steps": 10, "plants": [
+      {"name": "abop-1.27", "model": "lsystem", "grammar": "abop-1.27-stochastic", "position": [0, 0, 0], "seed": 3}]})");
+  r = runTendril("grow " + quoted(dir / "scene.json") + " --format glb -q -o " + quoted(dir / "scene"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const std::string plant = tendril::test::readText(dir / "a.glb");
+  EXPECT_FALSE(plant.empty());
+  EXPECT_TRUE(plant == tendril::test::readText(dir / "scene" / "plant.glb"));
+  // Another seed is another plant.
+  r = runTendril("lsys abop-1.27-stochastic --seed 4 -q -o " + quoted(dir / "b.glb"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_FALSE(plant == tendril::test::readText(dir / "b.glb"));
+
+  // In a scene (its environment, its seed 7, its output settings) at --at, derived -n steps.
+  const std::filesystem::path example = tendril::test::sourceDir() / "examples/scenes/ivy-lsystem.json";
+  r = runTendril("lsys japanese-ivy -n 25 --seed 2 --scene " + quoted(example) + " --at 0.75,0,0.15 -q -o " +
+                     quoted(dir / "c.glb"),
+                 dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  Json doc = parseJson(tendril::test::readText(example), example.string());
+  doc["steps"] = 25;
+  doc["plants"] = Json::parse(R"([{"name": "japanese-ivy", "model": "lsystem", "grammar": "japanese-ivy",
+      "position": [0.75, 0, 0.15], "seed": 2, "derivation_length": 25}])");
+  writeText(dir / "ivy.json", doc.dump());
+  r = runTendril("grow " + quoted(dir / "ivy.json") + " --format glb -q -o " + quoted(dir / "ivy"), dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const std::string ivy = tendril::test::readText(dir / "c.glb");
+  EXPECT_GT(ivy.size(), 10000u);
+  EXPECT_TRUE(ivy == tendril::test::readText(dir / "ivy" / "plant.glb"));
 }
 
 TEST(LSystemCli, ScenePlantsWithTheLSystemModel) {

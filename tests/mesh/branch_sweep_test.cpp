@@ -1,8 +1,8 @@
 #include "tendril/mesh/branch_sweep.h"
 
+#include "support/determinism.h"
 #include "support/synthetic_plants.h"
 #include "tendril/core/hash.h"
-#include "tendril/core/parallel.h"
 #include "tendril/mesh/mesh_stats.h"
 
 #include <gtest/gtest.h>
@@ -238,14 +238,7 @@ TEST(MeshSweep, OutputIsIndependentOfThreadCount) {
     h.add(m.indices);
     return h.digest();
   };
-  setThreadCount(1);
-  uint64_t one = hash();
-  setThreadCount(2);
-  uint64_t two = hash();
-  setThreadCount(0);
-  uint64_t all = hash();
-  EXPECT_EQ(one, two);
-  EXPECT_EQ(one, all);
+  tendril::test::sameAtEveryThreadCount(hash);
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 #include "tendril/mesh/leaf_mesh.h"
 
+#include "support/determinism.h"
 #include "support/synthetic_plants.h"
 #include "tendril/core/hash.h"
-#include "tendril/core/parallel.h"
 #include "tendril/mesh/mesh_stats.h"
 
 #include <gtest/gtest.h>
@@ -139,12 +139,7 @@ TEST(MeshLeaves, OutputIsIndependentOfThreadCount) {
     }
     return h.digest();
   };
-  setThreadCount(1);
-  uint64_t one = hash();
-  setThreadCount(2);
-  uint64_t two = hash();
-  setThreadCount(0);
-  EXPECT_EQ(one, two);
+  tendril::test::sameAtEveryThreadCount(hash);
 }
 
 }  // namespace

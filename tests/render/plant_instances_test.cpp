@@ -1,7 +1,7 @@
 #include "tendril/render/plant_instances.h"
 
+#include "support/determinism.h"
 #include "support/synthetic_plants.h"
-#include "tendril/core/parallel.h"
 #include "tendril/render/texture_layers.h"
 
 #include <gtest/gtest.h>
@@ -150,19 +150,19 @@ TEST(RenderInstances, AllPlantsAtOnceEqualPlantAfterPlantForAnyThreadCount) {
     appendBranchInstances(views[i], m.barkLayer, m.barkMean, wantBranches);
     appendLeafInstances(views[i], m.shapeLayer, m.shapeAspect, m.shapeTint, wantLeaves);
   }
-  for (int threads : {1, 2}) {
-    setThreadCount(threads);
+  // The instances as bytes: the same at every thread count, and those of the plants one by one.
+  const std::string got = tendril::test::sameAtEveryThreadCount([&] {
     std::vector<BranchInstance> gotBranches(3);  // replaced, not appended to
     std::vector<LeafInstance> gotLeaves(5);
     buildPlantInstances(views, materials, gotBranches, gotLeaves);
-    ASSERT_EQ(gotBranches.size(), wantBranches.size()) << threads;
-    ASSERT_EQ(gotLeaves.size(), wantLeaves.size()) << threads;
-    EXPECT_EQ(std::memcmp(gotBranches.data(), wantBranches.data(), wantBranches.size() * sizeof(BranchInstance)), 0)
-        << threads;
-    EXPECT_EQ(std::memcmp(gotLeaves.data(), wantLeaves.data(), wantLeaves.size() * sizeof(LeafInstance)), 0)
-        << threads;
-  }
-  setThreadCount(0);
+    return std::string(reinterpret_cast<const char*>(gotBranches.data()), gotBranches.size() * sizeof(BranchInstance)) +
+           "|" + std::string(reinterpret_cast<const char*>(gotLeaves.data()), gotLeaves.size() * sizeof(LeafInstance));
+  });
+  EXPECT_TRUE(got == std::string(reinterpret_cast<const char*>(wantBranches.data()),
+                                 wantBranches.size() * sizeof(BranchInstance)) +
+                         "|" +
+                         std::string(reinterpret_cast<const char*>(wantLeaves.data()),
+                                     wantLeaves.size() * sizeof(LeafInstance)));
 }
 
 TEST(RenderInstances, PrimitivesArePlacedByTheirNodeAndGroupedByMesh) {

@@ -1,9 +1,9 @@
 // Edit scripts: strict reading (errors name the file and the JSON pointer), replay that does
 // not depend on the thread count, journals that replay to the same state, and the CLI.
 #include "session/session_test_util.h"
+#include "support/determinism.h"
 #include "support/run_command.h"
 #include "tendril/core/error.h"
-#include "tendril/core/parallel.h"
 #include "tendril/session/edit_script.h"
 #include "tendril/session/session_file.h"
 
@@ -85,12 +85,10 @@ TEST(EditScript, ErrorsNameTheFileAndPointer) {
   }
 }
 
-uint64_t replay(int threads, const EditScript& script, std::vector<TimedEdit>* journal = nullptr) {
-  setThreadCount(threads);
+uint64_t replay(const EditScript& script, std::vector<TimedEdit>* journal = nullptr) {
   auto s = test::makeSession(test::sessionScene(test::kParticlePlant + "," + test::kClimbPlant));
   Editor editor(*s);
   runEditScript(editor, script, 48);
-  setThreadCount(0);
   if (journal) *journal = editor.journal();
   return s->stateHash();
 }
@@ -98,13 +96,11 @@ uint64_t replay(int threads, const EditScript& script, std::vector<TimedEdit>* j
 TEST(EditScript, EveryEditReplaysTheSameForAnyThreadCount) {
   const EditScript script = parseEditScript(parseJson(kScript, "edits.json"), "edits.json");
   std::vector<TimedEdit> journal;
-  const uint64_t one = replay(1, script, &journal);
-  EXPECT_EQ(replay(2, script), one);
-  EXPECT_EQ(replay(3, script), one);
+  const uint64_t one = tendril::test::sameAtEveryThreadCount([&] { return replay(script, &journal); });
   // The journal, written as a script and read back, replays to the same state.
   const Json written = editScriptToJson(journal);
   const EditScript again = parseEditScript(parseJson(written.dump(), "journal"), "journal");
-  EXPECT_EQ(replay(2, again), one);
+  EXPECT_EQ(replay(again), one);
   // Every kind of edit round-trips through JSON.
   for (const TimedEdit& t : script.edits) {
     Json j = editToJson(t.edit);

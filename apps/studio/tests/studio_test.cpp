@@ -1,8 +1,10 @@
 // tendril-studio end to end: the real binary, headless under xvfb-run, replaying edit scripts
 // that seed, paint, drag and cut; and its command-line errors.
+#include "tendril/io/gltf_writer.h"
 #include "tendril/io/image.h"
 #include "tendril/session/edit.h"
 #include "tendril/session/edit_script.h"
+#include "tendril/session/plant_export.h"
 #include "tendril/session/session.h"
 #include "tendril/session/session_file.h"
 
@@ -290,6 +292,37 @@ TEST(StudioHeadless, GraphAndGrammarEditsReplay) {
   session::runEditScript(editor, session::loadEditScript(kTestDir / "plant-edits.json"), 8);
   EXPECT_EQ(reportedSegments(editedErr), long(reference->segmentCount())) << editedErr;
   EXPECT_EQ(reference->stateHash(), s.stateHash());
+}
+
+
+TEST(StudioHeadless, ExportUsesTheScenesOutputSettings) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  // A graph plant (it does not grow: the frame count does not matter) on a box, written with
+  // 5 vertices around each stem, 2 samples per segment and the obstacles.
+  const std::string graph = (fs::path(TENDRIL_EXAMPLES_DIR) / "graphs/sunflower.json").string();
+  std::ofstream(dir / "scene.json") << R"({"tendril": 1, "environment": {"obstacles": [{"name": "base", "type": "box",
+      "size": [1, 0.2, 1], "position": [0, -0.1, 0]}]}, "output": {"radial_segments": 5, "subdivisions": 2,
+      "include_obstacles": true}, "plants": [{"name": "sunflower", "model": "graph", "graph": ")" + graph +
+                                           R"(", "position": [0, 0, 0]}]})";
+  std::string out, err;
+  ASSERT_EQ(runStudio(dir,
+                      quoted(dir / "scene.json") + " --frames 1 --size 400x300 --screenshot " + quoted(dir / "a.png") +
+                          " --export " + quoted(dir / "plants.glb"),
+                      true, &out, &err),
+            0)
+      << err;
+  // What tendril grow writes for the scene: the same bytes.
+  session::Session s(scene::loadScene(dir / "scene.json"));
+  const io::ExportScene scene = session::exportScene(s, "scene.json");
+  ASSERT_EQ(scene.meshes.size(), 1u);
+  io::writeGlb(scene, dir / "grow.glb", session::exportOptions(s.scene().output));
+  const std::string exported = readText(dir / "plants.glb");
+  EXPECT_GT(exported.size(), 10000u);
+  EXPECT_TRUE(exported == readText(dir / "grow.glb"));
+  // The default settings would have written other bytes.
+  io::writeGlb(scene, dir / "default.glb");
+  EXPECT_FALSE(exported == readText(dir / "default.glb"));
 }
 
 }  // namespace

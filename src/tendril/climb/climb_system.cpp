@@ -4,6 +4,7 @@
 #include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 #include "tendril/core/random.h"
+#include "tendril/env/seed_check.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_invoke.h>
@@ -122,10 +123,7 @@ uint32_t ClimbSystem::addPlant(const ClimbPlantDef& def, const env::Environment&
   plant->model.leafShapes = s.leafShapes;
 
   Vec3 p = def.position;
-  float sd = env.exactSignedDistance(p, 1.0f);
-  if (sd < 0.0f)
-    throw Error(def.name, "", fmt::format("seed position ({:.3g}, {:.3g}, {:.3g}) lies inside an obstacle", p.x(),
-                                          p.y(), p.z()));
+  env::checkSeedPosition(env, p, def.direction, def.name);
   Tip tip;
   tip.id = plant->nextTipId++;
   tip.dir = def.direction.normalized();

@@ -47,7 +47,7 @@ class ClimbSystem {
   ClimbSystem(ClimbSystem&&) noexcept;
   ClimbSystem& operator=(ClimbSystem&&) noexcept;
 
-  // Throws Error when the seed point lies inside an obstacle.
+  // Throws Error when the seed lies inside an obstacle (env::seedInsideObstacle).
   uint32_t addPlant(const ClimbPlantDef& def, const env::Environment& env);
   size_t plantCount() const { return plants_.size(); }
   const ClimbPlantDef& plantDef(uint32_t id) const { return plants_[id]->def; }

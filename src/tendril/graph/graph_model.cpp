@@ -1,6 +1,7 @@
 #include "tendril/graph/graph_model.h"
 
 #include "tendril/core/error.h"
+#include "tendril/env/seed_check.h"
 #include "tendril/graph/build_plant.h"
 #include "tendril/plant/plant_archive.h"
 
@@ -13,9 +14,10 @@ namespace {
 
 class GraphPlantSystem final : public models::PlantSystem {
  public:
-  void addPlant(const models::PlantSpec& spec, const env::Environment&) override {
+  void addPlant(const models::PlantSpec& spec, const env::Environment& env) override {
     const auto* params = spec.paramsAs<GraphPlantParams>();
     if (!params || !params->model) throw Error("", "/graph", "a graph plant needs a \"graph\" file");
+    env::checkSeedPosition(env, spec.position, spec.direction);
     plant::PlantModel model = *params->model;
     model.name = spec.name;
     plants_.push_back(std::move(model));
@@ -52,6 +54,17 @@ class GraphPlantSystem final : public models::PlantSystem {
   std::vector<plant::PlantModel> plants_;
 };
 
+// The graph's plant as it stands in a scene.
+void generateAt(GraphPlantParams& params, uint64_t seed, const Vec3& position, const Vec3& direction) {
+  ExpandOptions options;
+  options.seed = seed;
+  options.placement.position = position;
+  options.placement.rotation = rotationBetween(Vec3::UnitY(), direction);
+  const ITree tree = expand(params.graph, options);
+  params.instances = tree.instances.size();
+  params.model = std::make_shared<const plant::PlantModel>(buildPlant(tree));
+}
+
 std::shared_ptr<const models::ModelParams> readGraphPlant(JsonObject& o, const std::filesystem::path& baseDir) {
   auto params = std::make_shared<GraphPlantParams>();
   // "graph_document": the graph itself (an edited graph, e.g. from the studio); "graph" then
@@ -86,15 +99,22 @@ std::shared_ptr<const models::ModelParams> readGraphPlant(JsonObject& o, const s
 
   // The placement and seed are the scene's shared plant keys (already checked by the scene
   // reader); they are needed here because the plant is generated now.
-  ExpandOptions options;
-  options.seed = o.has("seed") ? o.seed("seed", 0) : params->graph->seed;
-  options.placement.position = o.vec3("position", Vec3::Zero());
-  options.placement.rotation = rotationBetween(Vec3::UnitY(), o.direction("direction", Vec3::UnitY()));
-  params->model = std::make_shared<const plant::PlantModel>(generatePlant(params->graph, options));
+  const uint64_t seed = o.has("seed") ? o.seed("seed", 0) : params->graph->seed;
+  const Vec3 position = o.vec3("position", Vec3::Zero());
+  generateAt(*params, seed, position, o.direction("direction", Vec3::UnitY()));
   return params;
 }
 
 }  // namespace
+
+models::PlantSpec graphPlant(models::PlantSpec plant, std::shared_ptr<const Graph> graph) {
+  auto params = std::make_shared<GraphPlantParams>();
+  params->graph = std::move(graph);
+  generateAt(*params, plant.seed, plant.position, plant.direction);
+  plant.model = "graph";
+  plant.params = std::move(params);
+  return plant;
+}
 
 models::ModelType graphModelType() {
   return {"graph", "component graph after seed 004 (Xfrog: p-graph expanded to an i-tree, then geometry)",

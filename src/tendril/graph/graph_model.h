@@ -18,8 +18,15 @@ namespace tendril::graph {
 struct GraphPlantParams : models::ModelParams {
   std::shared_ptr<const Graph> graph;
   std::shared_ptr<const plant::PlantModel> model;
+  size_t instances = 0;  // component instances of the expanded i-tree (for reports)
 };
 
 models::ModelType graphModelType();
+
+// A scene plant of this model, as the scene reader makes it of {"model": "graph", "graph": ...,
+// "seed": plant.seed}: the shared keys of `plant` (name, position, direction, seed) with `graph`
+// generated from that seed, standing at the position, +Y turned to the direction. For one-plant
+// scenes (scene/one_plant_scene.h): `tendril model`.
+models::PlantSpec graphPlant(models::PlantSpec plant, std::shared_ptr<const Graph> graph);
 
 }  // namespace tendril::graph

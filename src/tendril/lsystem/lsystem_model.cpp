@@ -1,6 +1,7 @@
 #include "tendril/lsystem/lsystem_model.h"
 
 #include "tendril/core/error.h"
+#include "tendril/env/seed_check.h"
 #include "tendril/lsystem/grammar_files.h"
 #include "tendril/lsystem/lsystem.h"
 
@@ -16,6 +17,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
   explicit LSystemPlantSystem(const models::SystemContext& c) : context_(c) {}
 
   void addPlant(const models::PlantSpec& spec, const env::Environment& env) override {
+    env::checkSeedPosition(env, spec.position, spec.direction);
     plants_.push_back(start(spec, plants_.size(), env));
     names_.push_back(spec.name);
     growthFlow_.push_back(spec.paramsAs<LSystemParams>()->growthFlow);
@@ -48,6 +50,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
   }
 
   size_t plantCount() const override { return plants_.size(); }
+  const LSystem& derivation(size_t plant) const { return *plants_.at(plant); }
 
   plant::PlantModel snapshot(size_t plant) const override {
     plant::PlantModel m = plants_.at(plant)->interpret();
@@ -162,6 +165,21 @@ std::shared_ptr<const models::ModelParams> readLSystemPlant(JsonObject& o, const
 }
 
 }  // namespace
+
+models::PlantSpec lsystemPlant(models::PlantSpec plant, std::shared_ptr<const Grammar> grammar,
+                              std::optional<int> derivationLength) {
+  auto params = std::make_shared<LSystemParams>();
+  params->grammar = std::move(grammar);
+  params->derivationLength = derivationLength;
+  plant.model = "lsystem";
+  plant.params = std::move(params);
+  return plant;
+}
+
+const LSystem* derivationOf(const models::PlantSystem& system, size_t plant) {
+  const auto* s = dynamic_cast<const LSystemPlantSystem*>(&system);
+  return s ? &s->derivation(plant) : nullptr;
+}
 
 models::ModelType lsystemModelType() {
   return {"lsystem", "an L-system grammar drawn by a turtle (docs/grammar.md); ?E queries see the scene",

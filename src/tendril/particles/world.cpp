@@ -4,6 +4,7 @@
 #include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 #include "tendril/core/timer.h"
+#include "tendril/env/seed_check.h"
 
 #include <fmt/format.h>
 
@@ -141,9 +142,7 @@ uint32_t ParticleWorld::spawn(uint32_t plant, uint32_t parent, Quat orientation,
 
 uint32_t ParticleWorld::addPlant(const std::string& name, const ParticleSpecies& species, const Vec3& position,
                                  const Vec3& direction, uint64_t seed, const env::Environment& env) {
-  if (env.exactSignedDistance(position, 1.0f) < 0.0f)
-    throw Error(name, "", fmt::format("seed position ({:.3g}, {:.3g}, {:.3g}) lies inside an obstacle", position.x(),
-                                      position.y(), position.z()));
+  env::checkSeedPosition(env, position, direction, name);
   env.buildDistanceFields();  // collisions read them every step
   Plant p;
   p.name = name;

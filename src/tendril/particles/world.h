@@ -83,7 +83,7 @@ class ParticleWorld final : public models::AirCoupling {
 
   // --- plants ---
   // Seeds a plant: a root particle held at `position` and a first apex growing along
-  // `direction`. Throws Error when the position lies inside an obstacle.
+  // `direction`. Throws Error when the seed lies inside an obstacle (env::seedInsideObstacle).
   uint32_t addPlant(const std::string& name, const ParticleSpecies& species, const Vec3& position,
                     const Vec3& direction, uint64_t seed, const env::Environment& env);
   size_t plantCount() const { return plants_.size(); }

@@ -1,0 +1,49 @@
+// Pinned results: the content hash of one example scene per model family after a few steps.
+// Any change to what these scenes grow — meant or not — fails here, so a change in results is
+// always made on purpose and said in its commit. (Results are also the same for any thread
+// count; tests/support/determinism.h checks that where the parallel code is.)
+#include "support/test_paths.h"
+
+#include "tendril/plant/plant_model.h"
+#include "tendril/session/session.h"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+namespace tendril {
+namespace {
+
+struct Pinned {
+  const char* scene;  // under examples/scenes/
+  uint32_t steps;     // grown this many steps (at most the scene's own, to stay quick)
+  uint64_t hash;      // plant::contentHash of every plant
+};
+
+// To update after a change that is meant to change results: put the value the failure reports
+// here, and say in the commit which results changed and why.
+constexpr Pinned kPinned[] = {
+    {"default.json", 260, 0x6b80def64c244a4cull},                // climbing ivy (seed 003)
+    {"particles-fig11-fence.json", 800, 0x7c897f6313ff5e0cull},  // particle plants (seed 000)
+    {"ivy-lsystem.json", 250, 0xac3a73f1df420a23ull},            // L-system ivy
+};
+
+TEST(PinnedResults, ExampleScenesGrowWhatTheyGrew) {
+  for (const Pinned& p : kPinned) {
+    SCOPED_TRACE(p.scene);
+    std::unique_ptr<session::Session> session = session::Session::open(test::sourceDir() / "examples/scenes" / p.scene);
+    session->run(p.steps);
+    const std::vector<plant::PlantModel> plants = session->plants();
+    size_t segments = 0;
+    for (const plant::PlantModel& plant : plants) segments += plant.nodeCount();
+    EXPECT_GT(segments, 2000u);  // grown, not a stump
+    const uint64_t hash = plant::contentHash(plants);
+    EXPECT_EQ(hash, p.hash) << fmt::format(
+        "examples/scenes/{} after {} steps grows other plants than it did: its content hash is now 0x{:016x}. If "
+        "that is meant, pin the new value in tests/session/pinned_results_test.cpp and say in the commit what "
+        "changed the results and why.",
+        p.scene, p.steps, hash);
+  }
+}
+
+}  // namespace
+}  // namespace tendril
