@@ -260,13 +260,7 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
   qr_[i] = (deformation.conjugate() * q_[i]).normalized();
   qp_[i] = q_[i];
   a_[i] = u.halfLength;
-  // Eq. 10: x = x_h + R u_f (current), x̄ = x̄_h + R̄ u_f (rest), from the parent's head.
-  const uint32_t p = parent_[i];
-  if (p != kNone) {
-    x_[i] = head(p) + q_[i] * Vec3(0, a_[i], 0);
-    xr_[i] = xr_[p] + qr_[p] * Vec3(0, a_[p], 0) + qr_[i] * Vec3(0, a_[i], 0);
-    xp_[i] = x_[i];
-  }
+  placeOnParent(i);
   updateMass(i);
   if (u.anchor && !(flags_[i] & kAnchored)) {
     flags_[i] |= kAnchored;
@@ -385,6 +379,16 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
   }
 }
 
+// Eq. 10: x = x_h + R u_f (current), x̄ = x̄_h + R̄ u_f (rest), from the parent's head.
+void ParticleWorld::placeOnParent(uint32_t i) {
+  const uint32_t p = parent_[i];
+  if (p != kNone) {
+    x_[i] = head(p) + q_[i] * Vec3(0, a_[i], 0);
+    xr_[i] = xr_[p] + qr_[p] * Vec3(0, a_[p], 0) + qr_[i] * Vec3(0, a_[i], 0);
+    xp_[i] = x_[i];
+  }
+}
+
 void ParticleWorld::growLeaves() {
   const float dt = settings_.dt;
   // Leaves grow with their branch (relative to the branch's growth speed).
@@ -395,12 +399,7 @@ void ParticleWorld::growLeaves() {
     if (a_[i] >= targetHalfLength_[i]) continue;
     const float rate = s.growthRate * targetHalfLength_[i] / std::max(0.5f * s.particleLength, 1e-6f);
     a_[i] = std::min(targetHalfLength_[i], a_[i] + 0.5f * rate * gdt);
-    const uint32_t p = parent_[i];
-    if (p != kNone) {
-      x_[i] = head(p) + q_[i] * Vec3(0, a_[i], 0);
-      xr_[i] = xr_[p] + qr_[p] * Vec3(0, a_[p], 0) + qr_[i] * Vec3(0, a_[i], 0);
-      xp_[i] = x_[i];
-    }
+    placeOnParent(i);
     updateMass(i);
   }
   for (AttachedLeaf& l : leaves_) {

@@ -200,6 +200,7 @@ class ParticleWorld final : public models::AirCoupling {
   struct ApexUpdate;  // what an apex decided (growth.cpp)
   void decideApex(uint32_t i, const env::Environment& env, ApexUpdate& u) const;
   void applyApex(uint32_t i, const ApexUpdate& u, const env::Environment& env);
+  void placeOnParent(uint32_t i);  // eq. 10, after the particle grew or turned
   void growLeaves();
   void attachLeavesOfLargePlants();
   void thicken();  // secondary growth

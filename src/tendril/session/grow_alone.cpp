@@ -1,7 +1,7 @@
-#include "tendril/scene/model_types.h"
 #include "tendril/session/grow_alone.h"
 
 #include "tendril/core/error.h"
+#include "tendril/scene/model_types.h"
 
 #include <fmt/format.h>
 
