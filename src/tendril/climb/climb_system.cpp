@@ -150,6 +150,49 @@ uint32_t ClimbSystem::addPlant(const ClimbPlantDef& def, const env::Environment&
   return plants_.back()->id;
 }
 
+// Program 1's segment(Tip) from the tip along `growDir`: kept clear of surfaces by eq. 5's
+// collision avoidance when the species has that rule, and held onto its support over edges and
+// round corners (surface hold). Updates the tip's normal; nothing when the tip is boxed in.
+std::optional<ClimbSystem::Segment> ClimbSystem::placeSegment(const ClimbSpecies& s, Tip& t, const Vec3& growDir,
+                                                              bool climbing, Rng hold,
+                                                              const env::Environment& env) const {
+  bool avoid = false;
+  for (const Rule& r : s.rules) avoid |= r.kind == RuleKind::CollisionAvoidance;
+  Segment seg{t.position + growDir * t.length, growDir, std::nullopt};
+  Vec3& end = seg.end;
+  Vec3& dir = seg.dir;
+  std::optional<env::SurfacePoint>& endSupport = seg.endSupport;
+  const env::SurfacePoint* hint = t.support ? &*t.support : nullptr;
+  if (avoid) {
+    Avoided a = avoidCollisions(env, t.position, growDir, t.length, s.surfaceOffset, s.adhesionDistance, t.normal, hint);
+    if (!a.ok) return std::nullopt;
+    end = a.end;
+    dir = a.dir;
+    endSupport = a.endSupport;
+    if (a.hit) t.normal = a.normal;
+    // Hold on: a climbing tip whose segment would end out of reach of every surface bends
+    // back toward the nearest one (over an edge, round a corner), unless it breaks free.
+    if (climbing && !endSupport && s.surfaceHold > 0.0f && hold.bernoulli(s.surfaceHold)) {
+      if (auto q = env.closestPoint(end, t.length + s.adhesionDistance)) {
+        Vec3 target = q->point + q->away * s.surfaceOffset - t.position;
+        if (target.squaredNorm() > 1e-10f) {
+          Avoided b = avoidCollisions(env, t.position, target.normalized(), t.length, s.surfaceOffset,
+                                      s.adhesionDistance, q->away, &*q);
+          if (b.ok) {
+            end = b.end;
+            dir = b.dir;
+            endSupport = b.endSupport;
+            t.normal = b.hit ? b.normal : q->away;
+          }
+        }
+      }
+    }
+  } else {
+    endSupport = env.closestPoint(end, s.adhesionDistance, hint);
+  }
+  return seg;
+}
+
 // Seed 003's PlaceLeaf rule at the end of the tip's new segment (out.node): two blades parted
 // by the species' spread, lying parallel to the nearest surface (upper side away from it) or
 // turned to the light in free air, each shrunk or dropped until its outline touches nothing.
@@ -284,45 +327,15 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
     }
   }
 
-  bool avoid = false;
-  for (const Rule& r : s.rules) avoid |= r.kind == RuleKind::CollisionAvoidance;
-
   // Program 1: Tip -> segment(Tip) Tip.
   const Vec3 growDir = flow.active() ? Vec3((windTurn * t.dir).normalized()) : t.dir;
-  Vec3 end = t.position + growDir * t.length;
-  Vec3 dir = growDir;
-  std::optional<env::SurfacePoint> endSupport;
-  const env::SurfacePoint* hint = t.support ? &*t.support : nullptr;
-  if (avoid) {
-    Avoided a = avoidCollisions(env, t.position, growDir, t.length, s.surfaceOffset, s.adhesionDistance, t.normal, hint);
-    if (!a.ok) {  // boxed in: nowhere to grow
-      out.dies = true;
-      return;
-    }
-    end = a.end;
-    dir = a.dir;
-    endSupport = a.endSupport;
-    if (a.hit) t.normal = a.normal;
-    // Hold on: a climbing tip whose segment would end out of reach of every surface bends
-    // back toward the nearest one (over an edge, round a corner), unless it breaks free.
-    if (climbing && !endSupport && s.surfaceHold > 0.0f && rng(kPurposeHold).bernoulli(s.surfaceHold)) {
-      if (auto q = env.closestPoint(end, t.length + s.adhesionDistance)) {
-        Vec3 target = q->point + q->away * s.surfaceOffset - t.position;
-        if (target.squaredNorm() > 1e-10f) {
-          Avoided b = avoidCollisions(env, t.position, target.normalized(), t.length, s.surfaceOffset,
-                                      s.adhesionDistance, q->away, &*q);
-          if (b.ok) {
-            end = b.end;
-            dir = b.dir;
-            endSupport = b.endSupport;
-            t.normal = b.hit ? b.normal : q->away;
-          }
-        }
-      }
-    }
-  } else {
-    endSupport = env.closestPoint(end, s.adhesionDistance, hint);
+  std::optional<Segment> segment = placeSegment(s, t, growDir, climbing, rng(kPurposeHold), env);
+  if (!segment) {  // boxed in: nowhere to grow
+    out.dies = true;
+    return;
   }
+  const Vec3 end = segment->end, dir = segment->dir;
+  const std::optional<env::SurfacePoint>& endSupport = segment->endSupport;
   int crowd = s.crowdingRadius > 0.0f ? occupancy_.countWithin(end, s.crowdingRadius, s.crowdingLimit) : 0;
   if (s.crowdingRadius > 0.0f && crowd >= s.crowdingLimit) {
     out.dies = true;  // the plant already covers this spot

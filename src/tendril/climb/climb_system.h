@@ -111,6 +111,12 @@ class ClimbSystem {
   };
 
   void growTip(const Plant& plant, const Tip& tip, const env::Environment& env, Outcome& out) const;
+  struct Segment {
+    Vec3 end, dir;
+    std::optional<env::SurfacePoint> endSupport;
+  };
+  std::optional<Segment> placeSegment(const ClimbSpecies& s, Tip& t, const Vec3& growDir, bool climbing, Rng hold,
+                                      const env::Environment& env) const;
   // The PlaceLeaf rule on the segment growTip has just added (out.node, ending at out.end).
   void placeLeaves(const ClimbSpecies& s, const Tip& t, const Vec3& dir,
                    const std::optional<env::SurfacePoint>& endSupport, Rng lr, const env::Environment& env,

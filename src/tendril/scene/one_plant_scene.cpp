@@ -2,7 +2,7 @@
 
 namespace tendril::scene {
 
-Scene onePlantScene(PlantSpec plant, int steps, const std::optional<Scene>& base) {
+Scene onePlantScene(models::PlantSpec plant, int steps, const std::optional<Scene>& base) {
   Scene scene = base ? *base : Scene{};
   plant.pointer = "/plants/0";
   scene.plants.clear();

@@ -13,6 +13,6 @@ namespace tendril::scene {
 // `base` (its environment, seed, step time and output settings) with `plant` as its only plant
 // (at /plants/0), or a scene with nothing else when there is no base: no obstacles, seed 1,
 // default output settings. `steps` is what the scene runs (`tendril grow`'s "steps").
-Scene onePlantScene(PlantSpec plant, int steps, const std::optional<Scene>& base = std::nullopt);
+Scene onePlantScene(models::PlantSpec plant, int steps, const std::optional<Scene>& base = std::nullopt);
 
 }  // namespace tendril::scene

@@ -103,193 +103,240 @@ std::string plantKeyFor(const std::string& model) {
   return "species";
 }
 
+// Applies one edit to the session: std::visit over the Edit's alternatives, one function each.
+struct EditApplier {
+  Session& s;
+  Editor& editor;
+  Editor::Drag& drag;
+  env::Environment& env;
+  void operator()(const SeedPlant& e) const;
+  void operator()(const SeedBranch& e) const;
+  void operator()(const Cut& e) const;
+  void operator()(const DragBegin& e) const;
+  void operator()(const DragMove& e) const;
+  void operator()(const DragEnd&) const;
+  void operator()(const PaintStroke& e) const;
+  void operator()(const MoveObstacle& e) const;
+  void operator()(const AddObstacle& e) const;
+  void operator()(const MoveLight& e) const;
+  void operator()(const AddEmitter& e) const;
+  void operator()(const EditEmitter& e) const;
+  void operator()(const RemoveEmitter& e) const;
+  void operator()(const SetSpecies& e) const;
+  void operator()(const SetGrammar& e) const;
+  void operator()(const SetGraph& e) const;
+  void operator()(const Step& e) const;
+  void operator()(const Undo&) const;
+  void operator()(const Redo&) const;
+};
+
+void EditApplier::operator()(const SeedPlant& e) const {
+  requireFinite(e.position, "seed_plant", "position");
+  requireFinite(e.normal, "seed_plant", "normal");
+  if (e.normal.squaredNorm() == 0.0f) throw Error("seed_plant", "/normal", "must not be zero");
+  Json plant = Json::object();
+  std::string name = e.name;
+  for (size_t n = s.plantCount(); name.empty(); ++n) {
+    std::string candidate = fmt::format("plant{}", n);
+    bool used = false;
+    for (size_t i = 0; i < s.plantCount(); ++i) used |= s.plantSpec(i).name == candidate;
+    if (!used) name = candidate;
+  }
+  plant["name"] = name;
+  plant["model"] = e.model;
+  plant["position"] = vec3Json(e.position);
+  plant["direction"] = vec3Json(e.normal);
+  plant["seed"] = e.seed;
+  if (!e.species.empty()) plant[plantKeyFor(e.model)] = e.species;
+  s.addPlant(plant, "seed_plant");
+}
+
+void EditApplier::operator()(const SeedBranch& e) const {
+  models::BranchSeeding& b = capability(s, e.plant, &models::PlantSystem::branchSeeding, "seed_branch");
+  requireFinite(e.direction, "seed_branch", "direction");
+  b.seedBranch(s.indexInSystem(e.plant), e.particle, e.direction, "seed_branch");
+}
+
+void EditApplier::operator()(const Cut& e) const {
+  requirePlant(s, e.plant, "cut");
+  try {
+    s.system(e.plant).cut(s.indexInSystem(e.plant), e.node);
+  } catch (const Error& err) {
+    throw Error("cut", "/node", fmt::format("plant {} (model \"{}\"): {}", e.plant, s.plantSpec(e.plant).model,
+                                            err.message()));
+  }
+}
+
+void EditApplier::operator()(const DragBegin& e) const {
+  if (editor.dragging()) throw Error("drag_begin", "", "a drag is already under way (end it with drag_end)");
+  models::Grip& g = capability(s, e.plant, &models::PlantSystem::grip, "drag_begin");
+  g.requireHandle(s.indexInSystem(e.plant), e.particle, "drag_begin");
+  requireFinite(e.target, "drag_begin", "target");
+  if (!(e.strength >= 0.0f && e.strength <= 1.0f))
+    throw Error("drag_begin", "/strength", fmt::format("must be in [0, 1], got {}", e.strength));
+  g.setDrag(e.particle, e.target, e.strength);
+  drag.plant = e.plant, drag.handle = e.particle, drag.strength = e.strength;
+}
+
+void EditApplier::operator()(const DragMove& e) const {
+  if (!editor.dragging()) throw Error("drag_move", "", "no drag is under way (start one with drag_begin)");
+  requireFinite(e.target, "drag_move", "target");
+  // The grip is lost when the dragged part broke off and went.
+  if (drag.plant < s.plantCount())
+    if (models::Grip* g = s.system(drag.plant).grip()) g->setDrag(drag.handle, e.target, drag.strength);
+}
+
+void EditApplier::operator()(const DragEnd&) const {
+  if (!editor.dragging()) throw Error("drag_end", "", "no drag is under way");
+  if (drag.plant < s.plantCount())
+    if (models::Grip* g = s.system(drag.plant).grip()) g->clearDrag();
+}
+
+void EditApplier::operator()(const PaintStroke& e) const {
+  const env::Stroke& st = e.stroke;
+  if (auto bad = scene::checkStroke(st)) throw settingsError("paint_stroke", *bad);
+  env.addStroke(st);
+  s.environmentChanged();
+  // An attracting stroke near a full-grown branch seeds a branch there, toward the
+  // stroke (seed 000 §5.1), in every model that can.
+  for (models::PlantSystem* system : s.systems())
+    if (models::BranchSeeding* b = system->branchSeeding()) b->seedBranchNear(st);
+}
+
+void EditApplier::operator()(const MoveObstacle& e) const {
+  if (e.obstacle >= env.obstacleCount())
+    throw Error("move_obstacle", "/obstacle",
+                fmt::format("there is no obstacle {} (the scene has {})", e.obstacle, env.obstacleCount()));
+  const RigidTransform t = checkedTransform(e.worldFromLocal, "move_obstacle");
+  if (e.scale) {
+    try {
+      s.setObstacleScale(e.obstacle, *e.scale);  // may replace the environment
+    } catch (const Error& err) {
+      throw Error("move_obstacle", err.location(), err.message());
+    }
+  }
+  s.environment().setObstacleTransform(e.obstacle, t);
+  s.environmentChanged();
+}
+
+void EditApplier::operator()(const AddObstacle& e) const {
+  const RigidTransform t = checkedTransform(e.worldFromLocal, "add_obstacle");
+  if (!isFinite(e.color) || !(e.color.array() >= 0.0f).all() || !(e.color.array() <= 1.0f).all())
+    throw Error("add_obstacle", "/color", "must be linear RGB in [0, 1]");
+  try {
+    s.importObstacle(e.path, e.name, t, e.scale, e.color);
+  } catch (const Error& err) {
+    if (!err.source().empty()) throw;  // the mesh file's own error names it
+    throw Error("add_obstacle", err.location(), err.message());
+  }
+}
+
+void EditApplier::operator()(const MoveLight& e) const {
+  std::vector<env::Light> lights = env.lights();
+  if (e.light >= lights.size())
+    throw Error("move_light", "/light",
+                fmt::format("there is no light {} (the scene has {})", e.light, lights.size()));
+  if (auto bad = scene::checkLight(e.value)) throw settingsError("move_light", *bad);
+  lights[e.light] = scene::normalised(e.value);
+  env.setLights(std::move(lights));
+}
+
+void requireEmitter(const std::vector<env::WindEmitter>& list, uint32_t index, const char* what) {
+  if (index >= list.size())
+    throw Error(what, "/index", fmt::format("there is no emitter {} (the scene has {})", index, list.size()));
+}
+
+void EditApplier::operator()(const AddEmitter& e) const {
+  std::vector<env::WindEmitter> list = env.windField().settings().emitters;
+  list.push_back(checkedEmitter(e.emitter, "add_emitter"));
+  s.setEmitters(std::move(list));
+}
+
+void EditApplier::operator()(const EditEmitter& e) const {
+  std::vector<env::WindEmitter> list = env.windField().settings().emitters;
+  requireEmitter(list, e.index, "edit_emitter");
+  list[e.index] = checkedEmitter(e.emitter, "edit_emitter");
+  s.setEmitters(std::move(list));
+}
+
+void EditApplier::operator()(const RemoveEmitter& e) const {
+  std::vector<env::WindEmitter> list = env.windField().settings().emitters;
+  requireEmitter(list, e.index, "remove_emitter");
+  list.erase(list.begin() + e.index);
+  s.setEmitters(std::move(list));
+}
+
+void EditApplier::operator()(const SetSpecies& e) const {
+  requirePlant(s, e.plant, "set_species");
+  if (!e.keys.is_object())
+    throw Error("set_species", "/species", "expected an object of species keys, got " + describeJson(e.keys));
+  Json plant = s.plantDescription(e.plant);
+  if (!plant.is_object())
+    throw Error("set_species", "/plant", fmt::format("plant {} was added from code; its species cannot be edited", e.plant));
+  Json species = plant.contains("species") ? plant["species"] : Json::object();
+  if (species.is_string()) species = Json{{"base", species.get<std::string>()}};
+  for (auto it = e.keys.begin(); it != e.keys.end(); ++it) species[it.key()] = it.value();
+  plant["species"] = species;
+  s.setPlantDescription(e.plant, plant, "set_species");
+}
+
+void EditApplier::operator()(const SetGrammar& e) const {
+  requirePlant(s, e.plant, "set_grammar");
+  if (s.plantSpec(e.plant).model != "lsystem")
+    throw Error("set_grammar", "/plant",
+                fmt::format("plant {} is of model \"{}\"; only L-system plants have a grammar", e.plant,
+                            s.plantSpec(e.plant).model));
+  Json plant = s.plantDescription(e.plant);
+  if (!plant.is_object())
+    throw Error("set_grammar", "/plant", fmt::format("plant {} was added from code; its grammar cannot be edited", e.plant));
+  plant["grammar_text"] = e.text;
+  if (e.derivationLength) plant["derivation_length"] = *e.derivationLength;
+  try {
+    s.setPlantDescription(e.plant, plant, "set_grammar");
+  } catch (const Error& err) {
+    // Errors in the text are placed in it (line:col), as the CLI prints them.
+    const std::string& loc = err.location();
+    const bool inText = !loc.empty() && std::isdigit(static_cast<unsigned char>(loc[0]));
+    throw Error("set_grammar", inText ? "/text " + loc : "/text", err.message());
+  }
+}
+
+void EditApplier::operator()(const SetGraph& e) const {
+  requirePlant(s, e.plant, "set_graph");
+  if (s.plantSpec(e.plant).model != "graph")
+    throw Error("set_graph", "/plant",
+                fmt::format("plant {} is of model \"{}\"; only graph plants have a p-graph", e.plant,
+                            s.plantSpec(e.plant).model));
+  if (!e.graph.is_object())
+    throw Error("set_graph", "/graph", "expected a graph object, got " + describeJson(e.graph));
+  Json plant = s.plantDescription(e.plant);
+  if (!plant.is_object())
+    throw Error("set_graph", "/plant", fmt::format("plant {} was added from code; its graph cannot be edited", e.plant));
+  plant["graph_document"] = e.graph;
+  try {
+    s.setPlantDescription(e.plant, plant, "set_graph");
+  } catch (const Error& err) {
+    // Errors in the graph are placed in it (its own JSON pointer).
+    const std::string& loc = err.location();
+    const bool inGraph = !loc.empty() && loc[0] == '/' && loc.rfind("/graph", 0) != 0;
+    throw Error("set_graph", inGraph ? "/graph" + loc : "/graph", err.message());
+  }
+}
+
+void EditApplier::operator()(const Step& e) const {
+  for (uint32_t i = 0; i < e.count; ++i) s.step();
+}
+
+void EditApplier::operator()(const Undo&) const {
+  editor.undo();
+}
+
+void EditApplier::operator()(const Redo&) const {
+  editor.redo();
+}
+
 void applyTo(Session& s, const Edit& edit, Editor& editor, Editor::Drag& drag) {
-  env::Environment& env = s.environment();
-  std::visit(
-      Overloaded{
-          [&](const SeedPlant& e) {
-            requireFinite(e.position, "seed_plant", "position");
-            requireFinite(e.normal, "seed_plant", "normal");
-            if (e.normal.squaredNorm() == 0.0f) throw Error("seed_plant", "/normal", "must not be zero");
-            Json plant = Json::object();
-            std::string name = e.name;
-            for (size_t n = s.plantCount(); name.empty(); ++n) {
-              std::string candidate = fmt::format("plant{}", n);
-              bool used = false;
-              for (size_t i = 0; i < s.plantCount(); ++i) used |= s.plantSpec(i).name == candidate;
-              if (!used) name = candidate;
-            }
-            plant["name"] = name;
-            plant["model"] = e.model;
-            plant["position"] = vec3Json(e.position);
-            plant["direction"] = vec3Json(e.normal);
-            plant["seed"] = e.seed;
-            if (!e.species.empty()) plant[plantKeyFor(e.model)] = e.species;
-            s.addPlant(plant, "seed_plant");
-          },
-          [&](const SeedBranch& e) {
-            models::BranchSeeding& b = capability(s, e.plant, &models::PlantSystem::branchSeeding, "seed_branch");
-            requireFinite(e.direction, "seed_branch", "direction");
-            b.seedBranch(s.indexInSystem(e.plant), e.particle, e.direction, "seed_branch");
-          },
-          [&](const Cut& e) {
-            requirePlant(s, e.plant, "cut");
-            try {
-              s.system(e.plant).cut(s.indexInSystem(e.plant), e.node);
-            } catch (const Error& err) {
-              throw Error("cut", "/node", fmt::format("plant {} (model \"{}\"): {}", e.plant, s.plantSpec(e.plant).model,
-                                                      err.message()));
-            }
-          },
-          [&](const DragBegin& e) {
-            if (editor.dragging()) throw Error("drag_begin", "", "a drag is already under way (end it with drag_end)");
-            models::Grip& g = capability(s, e.plant, &models::PlantSystem::grip, "drag_begin");
-            g.requireHandle(s.indexInSystem(e.plant), e.particle, "drag_begin");
-            requireFinite(e.target, "drag_begin", "target");
-            if (!(e.strength >= 0.0f && e.strength <= 1.0f))
-              throw Error("drag_begin", "/strength", fmt::format("must be in [0, 1], got {}", e.strength));
-            g.setDrag(e.particle, e.target, e.strength);
-            drag.plant = e.plant, drag.handle = e.particle, drag.strength = e.strength;
-          },
-          [&](const DragMove& e) {
-            if (!editor.dragging()) throw Error("drag_move", "", "no drag is under way (start one with drag_begin)");
-            requireFinite(e.target, "drag_move", "target");
-            // The grip is lost when the dragged part broke off and went.
-            if (drag.plant < s.plantCount())
-              if (models::Grip* g = s.system(drag.plant).grip()) g->setDrag(drag.handle, e.target, drag.strength);
-          },
-          [&](const DragEnd&) {
-            if (!editor.dragging()) throw Error("drag_end", "", "no drag is under way");
-            if (drag.plant < s.plantCount())
-              if (models::Grip* g = s.system(drag.plant).grip()) g->clearDrag();
-          },
-          [&](const PaintStroke& e) {
-            const env::Stroke& st = e.stroke;
-            if (auto bad = scene::checkStroke(st)) throw settingsError("paint_stroke", *bad);
-            env.addStroke(st);
-            s.environmentChanged();
-            // An attracting stroke near a full-grown branch seeds a branch there, toward the
-            // stroke (seed 000 §5.1), in every model that can.
-            for (models::PlantSystem* system : s.systems())
-              if (models::BranchSeeding* b = system->branchSeeding()) b->seedBranchNear(st);
-          },
-          [&](const MoveObstacle& e) {
-            if (e.obstacle >= env.obstacleCount())
-              throw Error("move_obstacle", "/obstacle",
-                          fmt::format("there is no obstacle {} (the scene has {})", e.obstacle, env.obstacleCount()));
-            const RigidTransform t = checkedTransform(e.worldFromLocal, "move_obstacle");
-            if (e.scale) {
-              try {
-                s.setObstacleScale(e.obstacle, *e.scale);  // may replace the environment
-              } catch (const Error& err) {
-                throw Error("move_obstacle", err.location(), err.message());
-              }
-            }
-            s.environment().setObstacleTransform(e.obstacle, t);
-            s.environmentChanged();
-          },
-          [&](const AddObstacle& e) {
-            const RigidTransform t = checkedTransform(e.worldFromLocal, "add_obstacle");
-            if (!isFinite(e.color) || !(e.color.array() >= 0.0f).all() || !(e.color.array() <= 1.0f).all())
-              throw Error("add_obstacle", "/color", "must be linear RGB in [0, 1]");
-            try {
-              s.importObstacle(e.path, e.name, t, e.scale, e.color);
-            } catch (const Error& err) {
-              if (!err.source().empty()) throw;  // the mesh file's own error names it
-              throw Error("add_obstacle", err.location(), err.message());
-            }
-          },
-          [&](const MoveLight& e) {
-            std::vector<env::Light> lights = env.lights();
-            if (e.light >= lights.size())
-              throw Error("move_light", "/light",
-                          fmt::format("there is no light {} (the scene has {})", e.light, lights.size()));
-            if (auto bad = scene::checkLight(e.value)) throw settingsError("move_light", *bad);
-            lights[e.light] = scene::normalised(e.value);
-            env.setLights(std::move(lights));
-          },
-          [&](const AddEmitter& e) {
-            std::vector<env::WindEmitter> list = env.windField().settings().emitters;
-            list.push_back(checkedEmitter(e.emitter, "add_emitter"));
-            s.setEmitters(std::move(list));
-          },
-          [&](const EditEmitter& e) {
-            std::vector<env::WindEmitter> list = env.windField().settings().emitters;
-            if (e.index >= list.size())
-              throw Error("edit_emitter", "/index",
-                          fmt::format("there is no emitter {} (the scene has {})", e.index, list.size()));
-            list[e.index] = checkedEmitter(e.emitter, "edit_emitter");
-            s.setEmitters(std::move(list));
-          },
-          [&](const RemoveEmitter& e) {
-            std::vector<env::WindEmitter> list = env.windField().settings().emitters;
-            if (e.index >= list.size())
-              throw Error("remove_emitter", "/index",
-                          fmt::format("there is no emitter {} (the scene has {})", e.index, list.size()));
-            list.erase(list.begin() + e.index);
-            s.setEmitters(std::move(list));
-          },
-          [&](const SetSpecies& e) {
-            requirePlant(s, e.plant, "set_species");
-            if (!e.keys.is_object())
-              throw Error("set_species", "/species", "expected an object of species keys, got " + describeJson(e.keys));
-            Json plant = s.plantDescription(e.plant);
-            if (!plant.is_object())
-              throw Error("set_species", "/plant", fmt::format("plant {} was added from code; its species cannot be edited", e.plant));
-            Json species = plant.contains("species") ? plant["species"] : Json::object();
-            if (species.is_string()) species = Json{{"base", species.get<std::string>()}};
-            for (auto it = e.keys.begin(); it != e.keys.end(); ++it) species[it.key()] = it.value();
-            plant["species"] = species;
-            s.setPlantDescription(e.plant, plant, "set_species");
-          },
-          [&](const SetGrammar& e) {
-            requirePlant(s, e.plant, "set_grammar");
-            if (s.plantSpec(e.plant).model != "lsystem")
-              throw Error("set_grammar", "/plant",
-                          fmt::format("plant {} is of model \"{}\"; only L-system plants have a grammar", e.plant,
-                                      s.plantSpec(e.plant).model));
-            Json plant = s.plantDescription(e.plant);
-            if (!plant.is_object())
-              throw Error("set_grammar", "/plant", fmt::format("plant {} was added from code; its grammar cannot be edited", e.plant));
-            plant["grammar_text"] = e.text;
-            if (e.derivationLength) plant["derivation_length"] = *e.derivationLength;
-            try {
-              s.setPlantDescription(e.plant, plant, "set_grammar");
-            } catch (const Error& err) {
-              // Errors in the text are placed in it (line:col), as the CLI prints them.
-              const std::string& loc = err.location();
-              const bool inText = !loc.empty() && std::isdigit(static_cast<unsigned char>(loc[0]));
-              throw Error("set_grammar", inText ? "/text " + loc : "/text", err.message());
-            }
-          },
-          [&](const SetGraph& e) {
-            requirePlant(s, e.plant, "set_graph");
-            if (s.plantSpec(e.plant).model != "graph")
-              throw Error("set_graph", "/plant",
-                          fmt::format("plant {} is of model \"{}\"; only graph plants have a p-graph", e.plant,
-                                      s.plantSpec(e.plant).model));
-            if (!e.graph.is_object())
-              throw Error("set_graph", "/graph", "expected a graph object, got " + describeJson(e.graph));
-            Json plant = s.plantDescription(e.plant);
-            if (!plant.is_object())
-              throw Error("set_graph", "/plant", fmt::format("plant {} was added from code; its graph cannot be edited", e.plant));
-            plant["graph_document"] = e.graph;
-            try {
-              s.setPlantDescription(e.plant, plant, "set_graph");
-            } catch (const Error& err) {
-              // Errors in the graph are placed in it (its own JSON pointer).
-              const std::string& loc = err.location();
-              const bool inGraph = !loc.empty() && loc[0] == '/' && loc.rfind("/graph", 0) != 0;
-              throw Error("set_graph", inGraph ? "/graph" + loc : "/graph", err.message());
-            }
-          },
-          [&](const Step& e) {
-            for (uint32_t i = 0; i < e.count; ++i) s.step();
-          },
-          [&](const Undo&) { editor.undo(); },
-          [&](const Redo&) { editor.redo(); },
-      },
-      edit);
+  std::visit(EditApplier{s, editor, drag, s.environment()}, edit);
 }
 
 }  // namespace

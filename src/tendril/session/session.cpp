@@ -401,6 +401,22 @@ std::vector<uint8_t> Session::saveState() const {
   return out.take();
 }
 
+// Everything a saved state holds, read and checked before the session changes.
+struct Session::Loaded {
+  uint32_t steps = 0;
+  std::vector<SpecEntry> specs;
+  std::vector<RigidTransform> transforms;
+  std::vector<Vec3> scales;
+  std::vector<ImportedObstacle> imported;
+  std::vector<env::Light> lights;
+  std::vector<env::Stroke> strokes;
+  env::WindSettings wind;
+  std::vector<std::unique_ptr<models::PlantSystem>> systems;
+  std::vector<std::string> systemModels;
+  std::vector<PlantRef> plants;
+  std::unique_ptr<wind::SphAir> air;
+};
+
 void Session::loadState(std::span<const uint8_t> bytes, const std::string& source) {
   ArchiveReader in(bytes, source);
   in.tag(kStateTag, "a session state");
@@ -409,12 +425,31 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
   if (version != kStateVersion && version != 1)
     in.fail(versionAt, fmt::format("session state version {} is not supported (this build reads {})", version,
                                    kStateVersion));
-  const uint32_t steps = in.u32();
+  Loaded loaded;
+  loaded.steps = in.u32();
 
+  readSavedPlants(in, source, loaded);
+  readSavedEnvironment(in, version, loaded);
+  restoreSystems(in, loaded);
+  if (!in.atEnd()) in.fail("unexpected data after the session state");
+  // The imported meshes (from this session's cache, or read again from their files).
+  for (ImportedObstacle& o : loaded.imported) {
+    try {
+      o.mesh = importedMesh(o.path);
+    } catch (const Error& e) {
+      throw Error(source, "", fmt::format("imported obstacle \"{}\": {}", o.name, e.what()));
+    }
+  }
+  // Everything read: now the session changes.
+  applyLoaded(std::move(loaded));
+}
+
+
+void Session::readSavedPlants(ArchiveReader& in, const std::string& source, Loaded& loaded) const {
   // The plants: the ones this session knows by the same description are reused; others are
   // read again from their scene-file objects.
   const uint64_t plantCount = in.count(16, "plants");
-  std::vector<SpecEntry> specs;
+  std::vector<SpecEntry>& specs = loaded.specs;
   for (uint64_t i = 0; i < plantCount; ++i) {
     const size_t at = in.position();
     std::string model = in.string();
@@ -434,14 +469,18 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
     if (spec.model != model) in.fail(at, fmt::format("plant {} is of model \"{}\", not \"{}\"", i, spec.model, model));
     specs.push_back({std::move(spec), std::move(description), std::move(text)});
   }
+}
 
+void Session::readSavedEnvironment(ArchiveReader& in, uint32_t version, Loaded& loaded) const {
   const size_t obstaclesAt = in.position();
   const uint64_t obstacles = in.count(sizeof(RigidTransform), "obstacles");
   if (obstacles < scene_.obstacles.size())
     in.fail(obstaclesAt, fmt::format("the saved environment has {} obstacles, the scene {}", obstacles,
                                      scene_.obstacles.size()));
-  std::vector<RigidTransform> transforms(obstacles);
-  std::vector<Vec3> scales(obstacles, Vec3::Ones());
+  std::vector<RigidTransform>& transforms = loaded.transforms;
+  std::vector<Vec3>& scales = loaded.scales;
+  transforms.resize(obstacles);
+  scales.assign(obstacles, Vec3::Ones());
   for (size_t o = 0; o < obstacles; ++o) {
     in.value(transforms[o]);
     if (version >= 2) {
@@ -450,7 +489,7 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
       if (!validScale(scales[o])) in.fail(at, fmt::format("obstacle {} has a bad scale", o));
     }
   }
-  std::vector<ImportedObstacle> imported;
+  std::vector<ImportedObstacle>& imported = loaded.imported;
   if (version >= 2) {
     const size_t importedAt = in.position();
     imported.resize(size_t(in.count(24, "imported obstacles")));
@@ -466,15 +505,17 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
     in.fail(obstaclesAt, fmt::format("the saved environment has {} obstacles, the scene {}", obstacles,
                                      scene_.obstacles.size()));
   }
-  std::vector<env::Light> lights = in.vector<env::Light>();
-  std::vector<env::Stroke> strokes(size_t(in.count(17, "strokes")));
+  std::vector<env::Light>& lights = loaded.lights;
+  std::vector<env::Stroke>& strokes = loaded.strokes;
+  lights = in.vector<env::Light>();
+  strokes.resize(size_t(in.count(17, "strokes")));
   for (env::Stroke& s : strokes) {
     s.attract = in.boolean();
     s.radius = in.f32();
     s.strength = in.f32();
     in.vector(s.points);
   }
-  env::WindSettings wind = loadWind(in);
+  loaded.wind = loadWind(in);
   // What the scene format would refuse is refused here too: an obstacle moved past the world's
   // extent, a light or stroke out of range (the readers' own limits, scene/settings_schema.h).
   // Edits only make such values from checked input.
@@ -491,15 +532,17 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
       if (auto bad = scene::checkStroke(strokes[i]))
         in.fail(fmt::format("a painted stroke of the saved environment is out of range: /strokes/{}{}", i, *bad));
   }
+}
 
+void Session::restoreSystems(ArchiveReader& in, Loaded& loaded) const {
   // Systems made afresh for the saved plants (seeded in an empty world: their seeds are not
   // checked against obstacles that may have moved since), then given their saved state.
   env::Environment empty;
   empty.commit();
-  std::vector<std::unique_ptr<models::PlantSystem>> systems;
-  std::vector<std::string> systemModels;
-  std::vector<PlantRef> plants;
-  for (const SpecEntry& e : specs) {
+  std::vector<std::unique_ptr<models::PlantSystem>>& systems = loaded.systems;
+  std::vector<std::string>& systemModels = loaded.systemModels;
+  std::vector<PlantRef>& plants = loaded.plants;
+  for (const SpecEntry& e : loaded.specs) {
     size_t s = 0;
     while (s < systemModels.size() && systemModels[s] != e.spec.model) ++s;
     if (s == systems.size()) {
@@ -527,25 +570,20 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
   if (hasAir != (air_ != nullptr))
     in.fail(airAt, hasAir ? "the saved state has simulated air, this scene has none"
                           : "the saved state has no simulated air, this scene has");
-  std::unique_ptr<wind::SphAir> air;
   if (hasAir) {
-    air = std::make_unique<wind::SphAir>(air_->settings());
-    air->loadState(in);
+    loaded.air = std::make_unique<wind::SphAir>(air_->settings());
+    loaded.air->loadState(in);
   }
-  if (!in.atEnd()) in.fail("unexpected data after the session state");
-  // The imported meshes (from this session's cache, or read again from their files).
-  for (ImportedObstacle& o : imported) {
-    try {
-      o.mesh = importedMesh(o.path);
-    } catch (const Error& e) {
-      throw Error(source, "", fmt::format("imported obstacle \"{}\": {}", o.name, e.what()));
-    }
-  }
+}
 
-  // Everything read: now the session changes. The environment is rebuilt when its obstacle
-  // meshes differ (an import or a rescale undone); obstacles imported since are appended.
-  if (air) {
-    air_ = std::move(air);
+// The environment is rebuilt when its obstacle meshes differ (an import or a rescale undone);
+// obstacles imported since are appended.
+void Session::applyLoaded(Loaded&& loaded) {
+  std::vector<ImportedObstacle>& imported = loaded.imported;
+  std::vector<Vec3>& scales = loaded.scales;
+  const std::vector<RigidTransform>& transforms = loaded.transforms;
+  if (loaded.air) {
+    air_ = std::move(loaded.air);
     env_->setAirFlow(air_.get());
   }
   const bool samePrefix = imported.size() >= imported_.size() &&
@@ -566,21 +604,21 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
     ++obstacleRevision_;
   }
   for (uint32_t o = 0; o < transforms.size(); ++o) env_->setObstacleTransform(o, transforms[o]);
-  env_->setLights(std::move(lights));
-  env_->setStrokes(std::move(strokes));
-  env_->setWind(std::move(wind));
+  env_->setLights(std::move(loaded.lights));
+  env_->setStrokes(std::move(loaded.strokes));
+  env_->setWind(std::move(loaded.wind));
   env_->commit();
-  systems_ = std::move(systems);
-  systemModels_ = std::move(systemModels);
-  plants_ = std::move(plants);
+  systems_ = std::move(loaded.systems);
+  systemModels_ = std::move(loaded.systemModels);
+  plants_ = std::move(loaded.plants);
   // Specs beyond the restored plants are kept (a redo may bring their plants back).
-  for (size_t i = 0; i < specs.size(); ++i) {
+  for (size_t i = 0; i < loaded.specs.size(); ++i) {
     if (i < specs_.size())
-      specs_[i] = std::move(specs[i]);
+      specs_[i] = std::move(loaded.specs[i]);
     else
-      specs_.push_back(std::move(specs[i]));
+      specs_.push_back(std::move(loaded.specs[i]));
   }
-  steps_ = steps;
+  steps_ = loaded.steps;
 }
 
 void Session::setEmitters(std::vector<env::WindEmitter> emitters) {

@@ -2,6 +2,7 @@
 // Apps (CLI, studio) drive a Session; they never reach around it.
 #pragma once
 
+#include "tendril/core/archive.h"
 #include "tendril/env/environment.h"
 #include "tendril/models/registry.h"
 #include "tendril/plant/plant_model.h"
@@ -148,6 +149,12 @@ class Session {
     }
   };
   size_t systemFor(const std::string& model);
+  // loadState's phases: read and check (the session unchanged), then apply.
+  struct Loaded;
+  void readSavedPlants(ArchiveReader& in, const std::string& source, Loaded& loaded) const;
+  void readSavedEnvironment(ArchiveReader& in, uint32_t version, Loaded& loaded) const;
+  void restoreSystems(ArchiveReader& in, Loaded& loaded) const;
+  void applyLoaded(Loaded&& loaded);
   // The mesh file behind an imported obstacle, read once per session (undo and redo reuse it).
   std::shared_ptr<const TriangleMesh> importedMesh(const std::string& path);
   // The environment's definition of obstacle `index` at its current scale (not transform).
