@@ -118,7 +118,7 @@ models::PlantSpec graphPlant(models::PlantSpec plant, std::shared_ptr<const Grap
 
 models::ModelType graphModelType() {
   return {"graph", "component graph after seed 004 (Xfrog: p-graph expanded to an i-tree, then geometry)",
-          readGraphPlant, [](const models::SystemContext&) { return std::make_unique<GraphPlantSystem>(); }};
+          readGraphPlant, [](const models::SystemContext&) { return std::make_unique<GraphPlantSystem>(); }, "graph"};
 }
 
 }  // namespace tendril::graph

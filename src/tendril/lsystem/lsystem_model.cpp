@@ -183,7 +183,8 @@ const LSystem* derivationOf(const models::PlantSystem& system, size_t plant) {
 
 models::ModelType lsystemModelType() {
   return {"lsystem", "an L-system grammar drawn by a turtle (docs/grammar.md); ?E queries see the scene",
-          readLSystemPlant, [](const models::SystemContext& c) { return std::make_unique<LSystemPlantSystem>(c); }};
+          readLSystemPlant, [](const models::SystemContext& c) { return std::make_unique<LSystemPlantSystem>(c); },
+          "grammar"};
 }
 
 }  // namespace tendril::lsystem

@@ -90,6 +90,9 @@ struct ModelType {
   std::function<std::shared_ptr<const models::ModelParams>(JsonObject& plant, const std::filesystem::path& baseDir)>
       read;
   std::function<std::unique_ptr<PlantSystem>(const SystemContext& context)> createSystem;
+  // The scene-plant key that names the plant's model settings (a species preset or file, a
+  // grammar, a graph): what seed_plant's "species" fills in.
+  std::string settingsKey = "species";
 };
 
 }  // namespace tendril::models

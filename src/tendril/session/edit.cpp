@@ -97,10 +97,10 @@ env::WindEmitter checkedEmitter(const env::WindEmitter& e, const char* what) {
   return scene::normalised(e);
 }
 
+// The scene-plant key of the model's settings ("species", "grammar", "graph").
 std::string plantKeyFor(const std::string& model) {
-  if (model == "lsystem") return "grammar";
-  if (model == "graph") return "graph";
-  return "species";
+  const models::ModelType* type = scene::findModelType(model);
+  return type ? type->settingsKey : "species";
 }
 
 // Applies one edit to the session: std::visit over the Edit's alternatives, one function each.
