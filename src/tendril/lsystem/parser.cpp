@@ -826,39 +826,26 @@ class Parser {
     int n = 0;
   };
 
-  ExprPtr logicalOr() {
-    ExprPtr l = logicalAnd();
+  // A left-associative chain of a doubled operator (|| or &&) over `operand`.
+  ExprPtr logicalChain(char c, Expr::Kind kind, ExprPtr (Parser::*operand)()) {
+    ExprPtr l = (this->*operand)();
     ChainDepth chain(*this);
     for (;;) {
       blank();
-      if (!(peek() == '|' && peek(1) == '|')) return l;
+      if (!(peek() == c && peek(1) == c)) return l;
       chain.next();
       SourcePos pos = here();
       p_ += 2;
       blank();
-      auto e = node(Expr::Kind::Or, pos);
+      auto e = node(kind, pos);
       e->args.push_back(std::move(l));
-      e->args.push_back(logicalAnd());
+      e->args.push_back((this->*operand)());
       l = std::move(e);
     }
   }
 
-  ExprPtr logicalAnd() {
-    ExprPtr l = comparison();
-    ChainDepth chain(*this);
-    for (;;) {
-      blank();
-      if (!(peek() == '&' && peek(1) == '&')) return l;
-      chain.next();
-      SourcePos pos = here();
-      p_ += 2;
-      blank();
-      auto e = node(Expr::Kind::And, pos);
-      e->args.push_back(std::move(l));
-      e->args.push_back(comparison());
-      l = std::move(e);
-    }
-  }
+  ExprPtr logicalOr() { return logicalChain('|', Expr::Kind::Or, &Parser::logicalAnd); }
+  ExprPtr logicalAnd() { return logicalChain('&', Expr::Kind::And, &Parser::comparison); }
 
   ExprPtr binary(char op, SourcePos pos, ExprPtr l, ExprPtr r) {
     auto e = node(Expr::Kind::Binary, pos);
