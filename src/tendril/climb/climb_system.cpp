@@ -312,10 +312,14 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
     flow = plant::growthStep(windHere.norm(), s.growthFlow);
   }
   Quat windTurn = Quat::Identity();  // still-air direction -> the direction grown in the wind
-  if (flow.active()) {
+  if (flow.active())
     t.windAngle = plant::nextGrowthAngle(t.windAngle < 0.0f ? s.growthFlow.angle0 : t.windAngle, flow);
-    const Vec3 bent = plant::windGrowthDirection(t.dir, windHere, t.windAngle);
-    windTurn = Quat::FromTwoVectors(t.dir, bent);
+  // The angle grows only while f(w) > 0, but a shoot keeps the turn it has grown when a gust
+  // drops below w_min (it turns toward the wind there is): snapping back to its still-air
+  // direction would make it zig-zag in gusty wind.
+  const bool turned = t.windAngle > 0.0f && windHere.squaredNorm() > 0.0f;
+  if (turned) windTurn = Quat::FromTwoVectors(t.dir, plant::windGrowthDirection(t.dir, windHere, t.windAngle));
+  if (flow.active()) {
     t.length *= flow.length;
     if (s.growthFlow.maxLength > 0.0f) t.length = std::min(t.length, s.growthFlow.maxLength);
     t.radius *= flow.radius;
@@ -328,7 +332,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   }
 
   // Program 1: Tip -> segment(Tip) Tip.
-  const Vec3 growDir = flow.active() ? Vec3((windTurn * t.dir).normalized()) : t.dir;
+  const Vec3 growDir = turned ? Vec3((windTurn * t.dir).normalized()) : t.dir;
   std::optional<Segment> segment = placeSegment(s, t, growDir, climbing, rng(kPurposeHold), env);
   if (!segment) {  // boxed in: nowhere to grow
     out.dies = true;
@@ -357,7 +361,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   t.normal = frame.col(2);
   t.position = end;
   // The shoot keeps its still-air direction; the wind's growth angle bends what it grows.
-  t.dir = flow.active() ? Vec3((windTurn.conjugate() * dir).normalized()) : dir;
+  t.dir = turned ? Vec3((windTurn.conjugate() * dir).normalized()) : dir;
   t.segments += 1;
   t.support = endSupport;
 
