@@ -19,6 +19,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <set>
 
@@ -33,6 +34,7 @@ struct GrowOptions {
   int64_t every = 0;
   double windAnimation = -1.0;  // seconds; < 0: the scene's output.wind_animation
   bool windFrames = false;      // also every frame of the clip as its own .glb
+  double growthAnimation = 0.0; // seconds; > 0: plant-growth.glb, the plants growing as they move
   std::string formats = "glb,obj";
   CommonOptions common;
 };
@@ -100,6 +102,22 @@ int runGrow(const GrowOptions& o) {
       for (std::filesystem::path& f : wind::writeWindFrames(animated, session.environment().windField(), a, outDir, "plant-wind"))
         written.push_back(f.string());
   }
+  // A clip of the plants growing (joints scaling in by the age of their nodes) as they move.
+  if (o.growthAnimation > 0.0) {
+    std::vector<plant::GrowthFlowSpecies> species = session.growthFlow();
+    std::vector<wind::AnimatedPlant> animated;
+    for (size_t i = 0; i < exportScene.plants.size(); ++i) animated.push_back({&exportScene.plants[i], species[i]});
+    wind::WindAnimationOptions a;
+    a.seconds = float(o.growthAnimation);
+    a.fps = sc.output.animationFps;
+    a.maxJoints = std::max(sc.output.animationJoints, 256);
+    a.seed = sc.seed;
+    a.mesh = options.mesh;
+    a.growth = true;
+    std::filesystem::path file = outDir / "plant-growth.glb";
+    wind::writeWindAnimationGlb(animated, session.environment().windField(), a, file);
+    written.push_back(file.string());
+  }
 
   if (!o.common.quiet) {
     size_t segments = 0, leaves = 0;
@@ -139,8 +157,12 @@ RegisterCommand registerGrow("grow", "Grow every plant of a scene and write the 
                  "scene's wind (overrides output.wind_animation; 0 = none)")
       ->check(CLI::Range(0.0, 600.0));
   sub.add_flag("--wind-frames", o->windFrames,
-               "Also write every frame of the wind clip as plant-wind_0000.glb, ... (leaves bend, twist and "
-               "vibrate on their own, which the looping clip cannot carry)");
+               "Also write every frame of the wind clip as plant-wind_0000.glb, ... (static meshes of the "
+               "clip's poses, for tools that play no skins or morph targets)");
+  sub.add_option("--growth-animation", o->growthAnimation,
+                 "Also write plant-growth.glb: a clip of this many seconds of the plants growing while they move "
+                 "in the scene's wind (0 = none)")
+      ->check(CLI::Range(0.0, 600.0));
   sub.add_option("--format", o->formats, "Comma-separated output formats: glb, obj")->capture_default_str();
   addCommonOptions(sub, o->common);
   return [o] { return runGrow(*o); };

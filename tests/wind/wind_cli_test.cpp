@@ -3,8 +3,10 @@
 #include "support/test_paths.h"
 
 #include <gtest/gtest.h>
+#include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 
 namespace tendril {
@@ -26,6 +28,68 @@ TEST(WindCli, GrowWritesTheLoopingClipAndItsFrames) {
     EXPECT_EQ(v.exitCode, 0) << v.out << v.err;
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "out" / "plant-wind_0012.glb"));
+}
+
+// Reads a float accessor (dense) of a .glb.
+std::vector<float> floatsOf(const tinygltf::Model& m, int index) {
+  const tinygltf::Accessor& a = m.accessors[size_t(index)];
+  const tinygltf::BufferView& v = m.bufferViews[size_t(a.bufferView)];
+  const size_t components = a.type == TINYGLTF_TYPE_SCALAR ? 1 : a.type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+  std::vector<float> out(a.count * components);
+  std::memcpy(out.data(), m.buffers[size_t(v.buffer)].data.data() + v.byteOffset + a.byteOffset, out.size() * 4);
+  return out;
+}
+
+tinygltf::Model loadGlb(const std::filesystem::path& file) {
+  tinygltf::Model m;
+  tinygltf::TinyGLTF loader;
+  std::string err, warn;
+  EXPECT_TRUE(loader.LoadBinaryFromFile(&m, &err, &warn, file.string())) << err;
+  return m;
+}
+
+TEST(WindCli, TheReadmesWindExampleMovesTheClingingIvysLeavesAndGrowsItInAClip) {
+  auto dir = test::scratchDir();
+  auto r = test::runTendril("grow " + quoted(test::sourceDir() / "examples/scenes/wind-gusty.json") + " -o " +
+                                quoted(dir / "out") + " --steps 90 --wind-animation 1 --growth-animation 2 --format glb --quiet",
+                            dir);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  for (const char* name : {"plant-wind.glb", "plant-growth.glb"}) {
+    SCOPED_TRACE(name);
+    auto v = test::validateGltf(dir / "out" / name, dir);
+    EXPECT_EQ(v.exitCode, 0) << v.out << v.err;
+  }
+  // The loop: ivy clinging to its wall has leaves that move (morph weights that change and
+  // close the loop).
+  {
+    tinygltf::Model m = loadGlb(dir / "out" / "plant-wind.glb");
+    ASSERT_EQ(m.animations.size(), 1u);
+    int weights = 0;
+    for (const tinygltf::AnimationChannel& c : m.animations[0].channels) {
+      if (c.target_path != "weights") continue;
+      ++weights;
+      const std::vector<float> w = floatsOf(m, m.animations[0].samplers[size_t(c.sampler)].output);
+      const size_t targets = m.meshes[size_t(m.nodes[size_t(c.target_node)].mesh)].weights.size();
+      ASSERT_GT(targets, 0u);
+      const size_t frames = w.size() / targets;
+      EXPECT_TRUE(std::equal(w.begin(), w.begin() + long(targets), w.end() - long(targets))) << "the loop closes";
+      EXPECT_FALSE(std::equal(w.begin(), w.begin() + long(targets), w.begin() + long((frames / 3) * targets)));
+    }
+    EXPECT_EQ(weights, 2) << "both ivy plants' leaves move";
+  }
+  // The growth clip: joints that start at scale 0 and end at 1.
+  {
+    tinygltf::Model m = loadGlb(dir / "out" / "plant-growth.glb");
+    ASSERT_EQ(m.animations.size(), 1u);
+    int growing = 0;
+    for (const tinygltf::AnimationChannel& c : m.animations[0].channels) {
+      if (c.target_path != "scale") continue;
+      const std::vector<float> s = floatsOf(m, m.animations[0].samplers[size_t(c.sampler)].output);
+      growing += s.front() < 1.0f;
+      EXPECT_EQ(s.back(), 1.0f);
+    }
+    EXPECT_GT(growing, 20);
+  }
 }
 
 TEST(WindCli, GrowWithSimulatedAirReportsIt) {

@@ -15,6 +15,8 @@
 #include <cmath>
 #include <cstring>
 #include <sstream>
+#include <array>
+#include <memory>
 #include <unordered_map>
 
 namespace tendril::wind {
@@ -132,6 +134,64 @@ std::vector<int32_t> nearestNodes(const plant::PlantModel& plant, const std::vec
   return out;
 }
 
+// The plant the clip is meshed from: the rest plant without the leaves the loop tears off.
+// `kept` gets the rest plant's index of each leaf left.
+plant::PlantModel withoutTornLeaves(const plant::PlantModel& rest, const LeafLoop& loop, std::vector<uint32_t>& kept) {
+  plant::PlantModel out = rest;
+  kept.clear();
+  for (size_t j = 0; j < rest.leafCount(); ++j)
+    if (!loop.leaves[j].torn) kept.push_back(uint32_t(j));
+  if (kept.size() == rest.leafCount()) return out;
+  auto pick = [&](auto& dst, const auto& src) {
+    dst.resize(kept.size());
+    for (size_t o = 0; o < kept.size(); ++o) dst[o] = src[kept[o]];
+  };
+  pick(out.leafNode, rest.leafNode);
+  pick(out.leafOffset, rest.leafOffset);
+  pick(out.leafRotation, rest.leafRotation);
+  pick(out.leafSize, rest.leafSize);
+  pick(out.leafThickness, rest.leafThickness);
+  pick(out.leafPetiole, rest.leafPetiole);
+  pick(out.leafShape, rest.leafShape);
+  if (rest.leafMotion.size() == rest.leafCount()) pick(out.leafMotion, rest.leafMotion);
+  return out;
+}
+
+// The leaves' loop as morph targets. Per leaf shape (the leaf mesh of that shape, its leaves in
+// index order) and motion k: each vertex's displacement when its leaf makes motion k at its full
+// amplitude, taken as half the difference between the leaf posed at +amplitude and at
+// −amplitude (the tangent of the motion, with the error of the small angles only).
+std::vector<std::array<std::vector<Vec3>, 3>> leafDisplacements(const plant::PlantModel& clipRest,
+                                                                const std::vector<uint32_t>& kept,
+                                                                const LeafLoop& loop, const mesh::MeshOptions& options) {
+  std::vector<std::array<std::vector<Vec3>, 3>> out(mesh::leafShapeCount(clipRest));
+  for (int k = 0; k < 3; ++k) {
+    std::vector<TriangleMesh> side[2];
+    for (int sign = 0; sign < 2; ++sign) {
+      plant::PlantModel posed = clipRest;
+      posed.leafMotion.assign(posed.leafCount(), Vec3::Zero());
+      for (size_t o = 0; o < kept.size(); ++o) {
+        const LeafLoop::Leaf& f = loop.leaves[kept[o]];
+        plant::LeafMotionState L;
+        const float a = sign == 0 ? f.amplitude[k] : -f.amplitude[k];
+        if (k == 0) (loop.bendsBlade ? L.bladeBend : L.petioleBend) = a;
+        else if (k == 1) L.twist = a;
+        else L.vibrate = a;
+        poseLeaf(clipRest.leafRotation[o].normalized(), L, posed.leafRotation[o], posed.leafMotion[o]);
+      }
+      side[sign] = mesh::buildLeafQuads(posed, options);
+    }
+    for (size_t s = 0; s < out.size() && s < side[0].size(); ++s) {
+      const std::vector<Vec3>& plus = side[0][s].positions;
+      const std::vector<Vec3>& minus = side[1][s].positions;
+      std::vector<Vec3>& d = out[s][size_t(k)];
+      d.resize(plus.size());
+      for (size_t v = 0; v < plus.size(); ++v) d[v] = 0.5f * (plus[v] - minus[v]);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
@@ -139,8 +199,19 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
   if (!(options.seconds > 0.0f) || options.fps < 1 || options.maxJoints < 1)
     throw Error(path.string(), "", "wind animation needs seconds > 0, fps >= 1 and joints >= 1");
   checkOutputPath(path);
+  // Growth-Flow motion of each plant, sway periods and leaf waves dividing the clip. The clip is
+  // meshed without the leaves the wind tears off.
+  std::vector<std::unique_ptr<wind::WindMotion>> motions;
+  std::vector<std::vector<uint32_t>> keptLeaves(plants.size());
   ExportScene scene;
-  for (const AnimatedPlant& p : plants) scene.plants.push_back(*p.plant);
+  for (size_t pi = 0; pi < plants.size(); ++pi) {
+    if (!plants[pi].plant) throw Error(path.string(), "", fmt::format("plant {} is missing", pi));
+    wind::MotionSettings ms;
+    ms.loopSeconds = options.seconds;
+    ms.seed = options.seed + pi;
+    motions.push_back(std::make_unique<wind::WindMotion>(*plants[pi].plant, plants[pi].species, ms));
+    scene.plants.push_back(withoutTornLeaves(*plants[pi].plant, motions.back()->prepareLeafLoop(wind), keptLeaves[pi]));
+  }
   ExportOptions exportOptions;
   exportOptions.mesh = options.mesh;
   ExportModel model = buildExportModel(scene, exportOptions);
@@ -166,7 +237,7 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
   WindAnimationStats stats;
   stats.keyframes = size_t(frames);
   for (size_t pi = 0; pi < plants.size(); ++pi) {
-    const plant::PlantModel& rest = *plants[pi].plant;
+    const plant::PlantModel& rest = scene.plants[pi];
     const ExportObject& object = model.objects[pi];
     const mesh::PlantMesh& pm = model.plantMeshes[pi];
     const size_t n = rest.nodeCount();
@@ -214,6 +285,16 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
                                             TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_MAT4, joints.size());
     gltf.skins.push_back(skin);
     const int skinIndex = int(gltf.skins.size() - 1);
+
+    // The leaves' own motion: morph targets (k, g) for motion k in phase group g, if any leaf moves.
+    wind::WindMotion& motion = *motions[pi];
+    const LeafLoop& leafLoop = motion.leafLoop();
+    bool leavesMove = false;
+    for (uint32_t j : keptLeaves[pi])
+      for (float a : leafLoop.leaves[j].amplitude) leavesMove = leavesMove || a > 0.0f;
+    std::vector<std::array<std::vector<Vec3>, 3>> displacement;
+    if (leavesMove) displacement = leafDisplacements(rest, keptLeaves[pi], leafLoop, options.mesh);
+    constexpr int kTargets = 3 * LeafLoop::kPhases;
 
     // The skinned mesh: every part with JOINTS_0 / WEIGHTS_0.
     tinygltf::Mesh gmesh;
@@ -272,23 +353,84 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
       prim.indices = bin.accessor(bin.view(m.indices.data(), m.indices.size() * sizeof(uint32_t),
                                            TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
                                   TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, m.indices.size());
+      if (leavesMove) {
+        // Every primitive of a mesh has the same targets: parts without leaves all zeros, the
+        // leaf parts sparse (target (k, g) holds only the vertices of the leaves in phase g of k).
+        std::vector<uint32_t> leafOfSlot;  // the clip plant's leaf of each leaf in this part
+        if (leafShape >= 0)
+          for (size_t l = 0; l < rest.leafCount(); ++l)
+            if (rest.leafShape[l] == leafShape) leafOfSlot.push_back(uint32_t(l));
+        int zeroTarget = -1;  // this part's all-zero target, shared by its targets that move nothing
+        for (int target = 0; target < kTargets; ++target) {
+          const int k = target / LeafLoop::kPhases, g = target % LeafLoop::kPhases;
+          std::vector<uint32_t> at;
+          std::vector<Vec3> by;
+          if (leafShape >= 0 && size_t(leafShape) < displacement.size()) {
+            const std::vector<Vec3>& d = displacement[size_t(leafShape)][size_t(k)];
+            for (size_t slot = 0; slot < leafOfSlot.size(); ++slot) {
+              const LeafLoop::Leaf& f = leafLoop.leaves[keptLeaves[pi][leafOfSlot[slot]]];
+              if (f.phase[k] != g || !(f.amplitude[k] > 0.0f)) continue;
+              for (size_t v = slot * nvLeaf; v < (slot + 1) * nvLeaf && v < d.size(); ++v) {
+                at.push_back(uint32_t(v));
+                by.push_back(d[v]);
+              }
+            }
+          }
+          int accessor = -1;
+          if (at.empty()) {
+            // No leaf of this part moves so: all zeros, which an accessor without a buffer is.
+            if (zeroTarget < 0) {
+              zeroTarget = bin.accessor(-1, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
+              gltf.accessors[size_t(zeroTarget)].minValues = {0.0, 0.0, 0.0};
+              gltf.accessors[size_t(zeroTarget)].maxValues = {0.0, 0.0, 0.0};
+            }
+            accessor = zeroTarget;
+          } else {
+            accessor = bin.accessor(-1, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, nv);
+            tinygltf::Accessor& a = gltf.accessors[size_t(accessor)];
+            a.sparse.isSparse = true;
+            a.sparse.count = int(at.size());
+            a.sparse.indices.bufferView = bin.view(at.data(), at.size() * sizeof(uint32_t), 0);
+            a.sparse.indices.byteOffset = 0;
+            a.sparse.indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+            a.sparse.values.bufferView = bin.view(by.data(), by.size() * sizeof(Vec3), 0);
+            a.sparse.values.byteOffset = 0;
+            Bounds3 tb;
+            if (at.size() < nv) tb.extend(Vec3::Zero());
+            for (const Vec3& p : by) tb.extend(p);
+            gltf.accessors[size_t(accessor)].minValues = {tb.min.x(), tb.min.y(), tb.min.z()};
+            gltf.accessors[size_t(accessor)].maxValues = {tb.max.x(), tb.max.y(), tb.max.z()};
+          }
+          prim.targets.push_back({{"POSITION", accessor}});
+        }
+      }
       gmesh.primitives.push_back(std::move(prim));
     }
-    if (!gmesh.primitives.empty()) {
+    if (leavesMove && !gmesh.primitives.empty()) {
+      gmesh.weights.assign(size_t(kTargets), 0.0);
+      // Target names (the convention Blender's importer reads for its shape keys).
+      tinygltf::Value::Array names;
+      const char* motionNames[3] = {"bend", "twist", "vibrate"};
+      for (int target = 0; target < kTargets; ++target)
+        names.emplace_back(fmt::format("leaf-{}-{}", motionNames[target / LeafLoop::kPhases], target % LeafLoop::kPhases));
+      tinygltf::Value::Object extras;
+      extras["targetNames"] = tinygltf::Value(std::move(names));
+      gmesh.extras = tinygltf::Value(std::move(extras));
+    }
+    int meshNodeIndex = -1;
+    const bool hasMesh = !gmesh.primitives.empty();
+    if (hasMesh) {
       gltf.meshes.push_back(std::move(gmesh));
       tinygltf::Node meshNode;
       meshNode.name = object.name;
       meshNode.mesh = int(gltf.meshes.size() - 1);
       meshNode.skin = skinIndex;
+      meshNodeIndex = int(gltf.nodes.size());
       gltf.nodes.push_back(std::move(meshNode));
       gscene.nodes.push_back(int(gltf.nodes.size() - 1));
     }
 
     // Keyframes: Growth-Flow sway with a period that divides the clip.
-    wind::MotionSettings ms;
-    ms.loopSeconds = options.seconds;
-    ms.seed = options.seed + pi;
-    wind::WindMotion motion(rest, plants[pi].species, ms);
     plant::PlantModel posed;
     std::vector<std::vector<float>> rot(joints.size(), std::vector<float>(size_t(frames) * 4));
     std::vector<std::vector<float>> trans(joints.size(), std::vector<float>(size_t(frames) * 3));
@@ -334,6 +476,68 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
       }
     }
     stats.joints += joints.size();
+
+    // Growth: each joint scales in over the growth time of the nodes it carries.
+    float grown = 0.0f;  // the plant's age: its oldest node's
+    for (float a : rest.age) grown = std::max(grown, a);
+    if (options.growth && grown > 0.0f) {
+      std::vector<float> start(joints.size()), end(joints.size());
+      for (size_t j = 0; j < joints.size(); ++j) start[j] = end[j] = grown - rest.age[size_t(joints[j])];
+      for (size_t i = 0; i < n; ++i) {
+        const size_t j = size_t(jointOf[i]);
+        end[j] = std::max(end[j], grown - rest.age[i]);
+      }
+      const float shortest = grown / 64.0f;  // a joint whose nodes were born at once still grows in visibly
+      std::vector<std::vector<float>> scale(joints.size(), std::vector<float>(size_t(frames) * 3));
+      std::vector<float> global(joints.size());
+      for (int k = 0; k < frames; ++k) {
+        const float g = std::min(grown, times[size_t(k)] / (kGrowthShare * options.seconds) * grown);
+        for (size_t j = 0; j < joints.size(); ++j) {  // parents first
+          float s = std::clamp((g - start[j]) / std::max(end[j] - start[j], shortest), 0.0f, 1.0f);
+          const float parent = parentJoint[j] >= 0 ? global[size_t(parentJoint[j])] : 1.0f;
+          s = std::min(s, parent);
+          global[j] = s;
+          const float local = parent > 0.0f ? s / parent : 0.0f;
+          std::fill_n(&scale[j][size_t(k) * 3], 3, local);
+        }
+      }
+      for (size_t j = 0; j < joints.size(); ++j) {
+        if (std::all_of(scale[j].begin(), scale[j].end(), [](float s) { return s == 1.0f; })) continue;
+        tinygltf::AnimationSampler sampler;
+        sampler.input = timeAccessor;
+        sampler.output = bin.accessor(bin.view(scale[j].data(), scale[j].size() * sizeof(float), 0),
+                                      TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, size_t(frames));
+        sampler.interpolation = "LINEAR";
+        animation.samplers.push_back(sampler);
+        tinygltf::AnimationChannel channel;
+        channel.sampler = int(animation.samplers.size() - 1);
+        channel.target_node = firstNode + int(j);
+        channel.target_path = "scale";
+        animation.channels.push_back(channel);
+        ++stats.growingJoints;
+      }
+    }
+
+    // The leaves' waves, one weight per target and keyframe.
+    if (leavesMove && hasMesh) {
+      std::vector<float> weights(size_t(frames) * kTargets);
+      for (int k = 0; k < frames; ++k)
+        for (int target = 0; target < kTargets; ++target)
+          weights[size_t(k) * kTargets + size_t(target)] =
+              leafLoop.wave(target / LeafLoop::kPhases, target % LeafLoop::kPhases, times[size_t(k)], options.seconds);
+      tinygltf::AnimationSampler sampler;
+      sampler.input = timeAccessor;
+      sampler.output = bin.accessor(bin.view(weights.data(), weights.size() * sizeof(float), 0),
+                                    TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, weights.size());
+      sampler.interpolation = "LINEAR";
+      animation.samplers.push_back(sampler);
+      tinygltf::AnimationChannel channel;
+      channel.sampler = int(animation.samplers.size() - 1);
+      channel.target_node = meshNodeIndex;
+      channel.target_path = "weights";
+      animation.channels.push_back(channel);
+      stats.morphTargets += size_t(kTargets);
+    }
   }
   gltf.scenes.push_back(std::move(gscene));
   gltf.defaultScene = 0;

@@ -6,9 +6,18 @@
 // one joint (weight 1): the joint of the skeleton node it was built from (leaves: their node;
 // bark: the segment whose surface is nearest). The joints' rotations and translations are
 // sampled from Growth-Flow motion (wind/motion.h) with loopSeconds set, so the last keyframe
-// equals the first and the clip repeats seamlessly. Leaves follow their branches; the leaves'
-// own bending, twisting and vibrating (Algorithm 2 picks a random motion each frame, so it does
-// not loop) are in the per-step sequence export instead.
+// equals the first and the clip repeats seamlessly. Leaves follow their branches, and their
+// own bending, twisting and vibrating is the loop's periodic leaf motion (motion.h, LeafLoop)
+// as 3 × LeafLoop::kPhases morph targets on each plant's mesh: target (k, g), named
+// leaf-<bend|twist|vibrate>-<g>, moves the leaves whose motion k is in phase group g by their
+// displacement at full amplitude (half the difference of the leaf posed at ±amplitude; sparse,
+// the other parts all zeros), and its weight is that group's triangle wave, so a vertex is
+// displaced by Σ amplitude · wave — the loop's leaf angles to small-angle accuracy. Morph
+// targets apply before skinning: leaves flutter on their swaying branches, and clinging ivy,
+// whose nodes its support holds, flutters in place. Leaves the wind tears off are left out.
+//
+// With `growth` the clip shows the plants growing as they move (joints scale in, see
+// WindAnimationOptions::growth); it is not meant to loop.
 //
 // The file passes the Khronos validator with no errors (tested). It is written atomically.
 #pragma once
@@ -30,7 +39,15 @@ struct WindAnimationOptions {
   int maxJoints = 128;   // per plant
   uint64_t seed = 1;
   mesh::MeshOptions mesh;
+  // A growth clip: the plants grow while they move. Over the first kGrowthShare of the clip
+  // every joint scales in from 0 at the growth time its node was born (the plant's age minus
+  // the node's, mapped onto the clip) to 1 once the last node it carries was born; the rest of
+  // the clip holds the grown plants moving. Scales are set relative to the parent joint, so a
+  // joint's geometry is at its own scale whatever its parent's. Plants whose nodes are all of
+  // one age (component graphs) are there from the start.
+  bool growth = false;
 };
+inline constexpr float kGrowthShare = 0.8f;
 
 struct AnimatedPlant {
   const plant::PlantModel* plant = nullptr;
@@ -40,6 +57,8 @@ struct AnimatedPlant {
 struct WindAnimationStats {
   size_t joints = 0;     // over all plants
   size_t keyframes = 0;  // per channel
+  size_t morphTargets = 0;  // the leaves' motion, over all plants
+  size_t growingJoints = 0;  // joints with a scale channel (growth clips)
   uint64_t bytes = 0;
 };
 
@@ -49,9 +68,10 @@ std::vector<int32_t> chooseJoints(const plant::PlantModel& plant, int maxJoints)
 WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
                                          const WindAnimationOptions& options, const std::filesystem::path& path);
 
-// The per-step sequence: every frame of the same clip (seconds × fps frames, the same sway as
-// the looping clip) as a static .glb of the posed plants, with what skinning cannot carry —
-// leaves bending, twisting and vibrating (eq. 10–15) and leaves torn off (Algorithm 2).
+// The per-step sequence: every frame of the same clip (seconds × fps frames, the same sway and
+// leaf motion as the looping clip) as a static .glb of the posed plants, for tools that play
+// neither skins nor morph targets; the leaves are posed exactly rather than to small-angle
+// accuracy.
 // Writes <dir>/<stem>_0000.glb, <stem>_0001.glb, … atomically and returns their paths.
 std::vector<std::filesystem::path> writeWindFrames(const std::vector<AnimatedPlant>& plants,
                                                    const env::WindField& wind, const WindAnimationOptions& options,

@@ -76,6 +76,41 @@ namespace detail {
 void setDragLanes(bool on) { gLanes.store(on, std::memory_order_relaxed); }
 }  // namespace detail
 
+void poseLeaf(const Quat& restRotation, const plant::LeafMotionState& leaf, Quat& rotation, Vec3& motion) {
+  rotation = posedLeafRotation(restRotation, leaf);
+  motion = leafMotionOf(leaf);
+}
+
+float triangleWave(float x) {
+  const float f = x - std::floor(x);  // [0, 1)
+  if (f < 0.25f) return 4.0f * f;
+  if (f < 0.75f) return 2.0f - 4.0f * f;
+  return 4.0f * f - 4.0f;
+}
+
+float LeafLoop::wave(int kind, int phase, float t, float loopSeconds) const {
+  // Whole cycles per loop: t / loopSeconds · cycles, reduced first so that t = loopSeconds
+  // gives the same value as t = 0 exactly.
+  const float u = t / loopSeconds;
+  const float cyclesDone = (u - std::floor(u)) * float(cycles[kind]);
+  return triangleWave(cyclesDone + float(phase) / float(kPhases));
+}
+
+plant::LeafMotionState LeafLoop::state(size_t leaf, float t, float loopSeconds) const {
+  plant::LeafMotionState L;
+  const Leaf& f = leaves[leaf];
+  if (f.torn) {
+    L.detached = true;
+    return L;
+  }
+  float a[3];
+  for (int k = 0; k < 3; ++k) a[k] = f.amplitude[k] > 0.0f ? f.amplitude[k] * wave(k, f.phase[k], t, loopSeconds) : 0.0f;
+  (bendsBlade ? L.bladeBend : L.petioleBend) = a[0];
+  L.twist = a[1];
+  L.vibrate = a[2];
+  return L;
+}
+
 WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpecies& species, MotionSettings settings)
     : rest_(rest), species_(species), settings_(settings) {
   const size_t n = rest_.nodeCount();
@@ -221,6 +256,14 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
     B.leafArea[l] = area[i] - stemA;
     B.free[l] = held[i] ? 0 : -1;
   }
+}
+
+void WindMotion::setRest(const plant::PlantModel& rest) {
+  const uint32_t frame = frame_;
+  std::vector<plant::LeafMotionState> leaves = std::move(leaves_);
+  *this = WindMotion(rest, species_, settings_);
+  frame_ = frame;
+  for (size_t j = 0; j < leaves.size() && j < leaves_.size(); ++j) leaves_[j] = leaves[j];
 }
 
 std::vector<Vec3> WindMotion::nodeTranslation() const {
@@ -419,6 +462,66 @@ void WindMotion::compose(float t, plant::PlantModel& posed) {
   }, 1);
 }
 
+const LeafLoop& WindMotion::prepareLeafLoop(const env::WindField& wind) {
+  if (leafLoopReady_ || !(settings_.loopSeconds > 0.0f)) return leafLoop_;
+  leafLoopReady_ = true;
+  const size_t m = rest_.leafCount();
+  LeafLoop& loop = leafLoop_;
+  loop.leaves.assign(m, LeafLoop::Leaf{});
+  // Algorithm 2's choice of bend (updateLeafMotion): the petiole when t_p > t_b, else the blade.
+  loop.bendsBlade = species_.petioleStrength <= species_.bladeStrength;
+  const float rates[3] = {loop.bendsBlade ? species_.bladeBendRate : species_.petioleBendRate, species_.twistRate,
+                          species_.vibrateRate};
+  const float limits[3] = {loop.bendsBlade ? species_.bladeBendLimit : species_.petioleBendLimit, species_.twistLimit,
+                           species_.vibrateLimit};
+  // The steady wind at each leaf's node (at its segment's centre of gravity, as for the sway).
+  const env::WindSettings& ws = wind.settings();
+  std::vector<float> speed(m, 0.0f);
+  for (size_t j = 0; j < m; ++j) {
+    const Vec3& c = centre_[leafNode_[j]];
+    Vec3 w;
+    if (ws.mode == env::WindMode::Sph) {
+      w = wind.sample(c, 0.0f);
+    } else {
+      w = ws.velocity;
+      for (const env::WindEmitter& e : ws.emitters) w += env::WindField::jet(e, c);
+    }
+    speed[j] = w.norm();
+  }
+  // Mean angular speed of each motion: w · rate · E[l_s] / 3.
+  const float meanGust = 0.5f * (1.0f + settings_.gustMin);
+  const float L = settings_.loopSeconds;
+  std::vector<float> live;
+  for (size_t j = 0; j < m; ++j) {
+    loop.leaves[j].torn = plant::leafDetaches(speed[j], species_);
+    if (!loop.leaves[j].torn && speed[j] > 0.0f) live.push_back(speed[j]);
+  }
+  float median = 0.0f;
+  if (!live.empty()) {
+    std::nth_element(live.begin(), live.begin() + live.size() / 2, live.end());
+    median = live[live.size() / 2];
+  }
+  for (int k = 0; k < 3; ++k) {
+    // A wave bouncing between ±limit at speed v has period 4 · limit / v.
+    const float v = median * rates[k] * meanGust / 3.0f;
+    const float period = v > 0.0f && limits[k] > 0.0f ? 4.0f * limits[k] / v : L;
+    loop.cycles[k] = int(std::clamp(std::round(L / period), 1.0f, 1000.0f));
+  }
+  for (size_t j = 0; j < m; ++j) {
+    LeafLoop::Leaf& f = loop.leaves[j];
+    Rng rng(mix64(leafKey_[j] ^ 0x5851f42d4c957f2dull));
+    for (int k = 0; k < 3; ++k) {
+      f.phase[k] = uint8_t(rng.below(LeafLoop::kPhases));
+      if (f.torn) continue;
+      const float v = speed[j] * rates[k] * meanGust / 3.0f;
+      const float quarter = 0.25f * L / float(loop.cycles[k]);
+      f.amplitude[k] = std::min(limits[k], v * quarter);
+    }
+    leaves_[j] = loop.state(j, 0.0f, L);
+  }
+  return leafLoop_;
+}
+
 void WindMotion::step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed) {
   const size_t n = rest_.nodeCount();
   const size_t m = rest_.leafCount();
@@ -466,13 +569,22 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   const uint32_t* const slot = k == m ? nullptr : slot_.data();  // none torn off: leaf j is posed leaf j
   Quat* const rotation = posed.leafRotation.data();
   Vec3* const motion = posed.leafMotion.data();
+  // In a loop every leaf follows its periodic motion; leaves torn off are so from the start.
+  const bool loop = settings_.loopSeconds > 0.0f;
+  if (loop && !leafLoopReady_) prepareLeafLoop(wind);
+  const LeafLoop* const leafLoop = loop ? &leafLoop_ : nullptr;
+  const float loopSeconds = settings_.loopSeconds;
   parallelFor(size_t(0), m, [=, &tore](size_t j) {
     plant::LeafMotionState& L = leaves[j];
     if (L.detached) return;
-    Rng rng(mix64(keys[j] ^ (uint64_t(frame) * 0x9e3779b97f4a7c15ull)));
-    int type = int(rng.below(3));
-    float gust = gustMin + (1.0f - gustMin) * rng.uniform();
-    plant::updateLeafMotion(L, type, speed[size_t(leafNode[j])], gust, dt, species);
+    if (leafLoop) {
+      L = leafLoop->state(j, t, loopSeconds);
+    } else {
+      Rng rng(mix64(keys[j] ^ (uint64_t(frame) * 0x9e3779b97f4a7c15ull)));
+      int type = int(rng.below(3));
+      float gust = gustMin + (1.0f - gustMin) * rng.uniform();
+      plant::updateLeafMotion(L, type, speed[size_t(leafNode[j])], gust, dt, species);
+    }
     if (L.detached) {
       tore.store(true, std::memory_order_relaxed);
     } else if (inPlace) {

@@ -23,6 +23,18 @@
 // the leaf mesh curls the blade, and leafMotion = (β, ψ, φ). Detached leaves are left out of
 // the posed plant from then on.
 //
+// Leaves in a loop. Algorithm 2's random choice per frame does not repeat, so with
+// loopSeconds > 0 each of a leaf's three motions (the bend — of the petiole or of the blade, as
+// Algorithm 2 picks —, the twist and the vibration) is the triangle wave eq. 10–15 trace when
+// the angle bounces between ±limit at the mean speed Algorithm 2 gives it: w · rate · (1 +
+// gustMin) / 2 (the mean gust fraction l_s) / 3 (one frame in three). Per plant and motion the
+// wave makes a whole number of cycles per loop, the number nearest the median leaf's; a leaf's
+// amplitude is what its own speed covers in a quarter period, at most the limit (leaves in
+// calmer air move less), and its phase is one of kLeafPhases quarters, drawn per leaf and
+// motion. w is the steady wind at the leaf's node (the prevailing wind and the emitters, or the
+// simulated air at t = 0); leaves whose steady wind exceeds their strength are torn off from
+// the first frame. The glTF clip carries exactly this motion as morph targets (gltf_animation.h).
+//
 // Results depend only on the rest plant, the wind, the seed and the frame number: random
 // choices are keyed by (seed, leaf, frame).
 #pragma once
@@ -36,6 +48,30 @@
 #include <vector>
 
 namespace tendril::wind {
+
+// The periodic leaf motion of a looping clip (see above). Motions: 0 bend, 1 twist, 2 vibrate.
+struct LeafLoop {
+  static constexpr int kPhases = 4;
+  int cycles[3] = {1, 1, 1};   // per motion: whole cycles per loop
+  bool bendsBlade = false;     // the bend moves the blade (β), not the petiole (θ)
+  struct Leaf {
+    float amplitude[3] = {0, 0, 0};  // rad; all 0 for a leaf torn off
+    uint8_t phase[3] = {0, 0, 0};    // the wave starts phase / kPhases of a cycle ahead
+    bool torn = false;
+  };
+  std::vector<Leaf> leaves;
+  // The wave of motion `kind` in phase group `phase` at time t: in [−1, 1], a leaf's angle is its
+  // amplitude times this.
+  float wave(int kind, int phase, float t, float loopSeconds) const;
+  // A leaf's motion state at time t.
+  plant::LeafMotionState state(size_t leaf, float t, float loopSeconds) const;
+};
+// The triangle wave of period 1: 0 at x = 0, rising to 1 at ¼, −1 at ¾.
+float triangleWave(float x);
+
+// A posed leaf from its rest rotation and motion state: rotation = rest · R_Y(ψ) · R_X(θ + φ),
+// motion = (β, ψ, φ) (the leaf mesh curls the blade by β).
+void poseLeaf(const Quat& restRotation, const plant::LeafMotionState& leaf, Quat& rotation, Vec3& motion);
 
 struct MotionSettings {
   float airDensity = 1.25f;  // kg/m³
@@ -56,9 +92,18 @@ class WindMotion {
   // topology, primitive meshes) is copied from the rest plant only into a new `posed`.
   void step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed);
 
+  // The plant changed (it grew, or was edited): carry on with `rest` as the rest plant. Leaves
+  // that still exist keep their motion state.
+  void setRest(const plant::PlantModel& rest);
+
   // Node i's sway angle in the last step (rad).
   float swayAngle(size_t i) const { return angle_[internal_[i]]; }
   const std::vector<plant::LeafMotionState>& leaves() const { return leaves_; }
+  // The leaves' periodic motion of a looping clip, made at the first step or by
+  // prepareLeafLoop (empty before, and without a loop).
+  const LeafLoop& leafLoop() const { return leafLoop_; }
+  // Makes the loop's leaf motion for `wind` now (once; the first step would), and returns it.
+  const LeafLoop& prepareLeafLoop(const env::WindField& wind);
   uint32_t frame() const { return frame_; }
   const plant::PlantModel& rest() const { return rest_; }
   // Posed rigid transform of node i's subtree in the last step: x ↦ rotation·x + translation.
@@ -141,6 +186,8 @@ class WindMotion {
   std::vector<uint64_t> leafKey_;  // random key of the leaf's motion; each frame mixes in its number
   std::vector<uint32_t> kept_;     // leaves still attached, in order
   std::vector<uint32_t> slot_;     // per leaf: its index in kept_ (the posed plant's leaf)
+  LeafLoop leafLoop_;
+  bool leafLoopReady_ = false;
   const plant::PlantModel* posedFor_ = nullptr;  // `posed` last written, its rest arrays copied
 };
 
