@@ -70,6 +70,8 @@ StudioOptions parseOptions(const std::vector<std::string>& args) {
       o.stats = true;
     } else if (a == "--paused") {
       o.paused = true;
+    } else if (a == "--no-sway") {
+      o.sway = false;
     } else if (!a.empty() && a[0] == '-') {
       throw Error("command line", a, "unknown option (see tendril-studio --help)");
     } else if (o.input.empty()) {
@@ -103,7 +105,8 @@ std::string usage() {
          "  --export OUT.glb|.obj  headless: also export the plants after the last frame\n"
          "  --size WxH             window size in pixels (default 1600x900)\n"
          "  --speed K              growth steps per frame while playing (default 1)\n"
-         "  --paused               start with the timeline paused (interactive runs)\n"
+         "  --paused               start with the timeline paused (interactive runs; headless runs too)\n"
+         "  --no-sway              start with the plants still in the wind (the wind panel's \"sway\")\n"
          "  --select KIND:INDEX    select plant:N, obstacle:N, light:N, emitter:N or stroke:N at the start\n"
          "  --stats                print per-frame timing: simulation, scene update, GL draw\n"
          "  -h, --help             this text\n";

@@ -22,7 +22,8 @@ struct StudioOptions {
   std::string select;      // "plant:0", "obstacle:1", ...: selected at the start (screenshots)
   int speed = 1;           // growth steps per frame while playing
   bool stats = false;      // per-frame timing on stdout
-  bool paused = false;     // start paused (interactive mode)
+  bool paused = false;     // start paused (headless runs too: the frames then only move in the wind)
+  bool sway = true;        // plants move in the scene's wind (the wind panel's toggle)
   bool help = false;
 
   bool headless() const { return frames >= 0; }

@@ -536,6 +536,9 @@ void Studio::Impl::drawWindPanel() {
               std::string(modes[mode]).c_str(), fieldLabel(schema, "velocity").c_str(), w.velocity.x(), w.velocity.y(),
               w.velocity.z());
   ImGui::Text("%zu emitter(s)", w.emitters.size());
+  ImGui::Checkbox("sway in the wind", &sway);
+  ImGui::SameLine();
+  ImGui::TextDisabled("(branches and leaves move while the plants grow)");
   for (const char* key : {"gust_strength", "gust_period", "gust_scale", "gust_turn"}) {
     const auto& f = schema.at(key);
     ImGui::Text("%s: %.2f", f.labelWithUnit().c_str(), schema::fileValue(f, w));

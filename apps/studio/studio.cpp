@@ -44,7 +44,8 @@ Studio::Impl::Impl(const StudioOptions& o) : options(o), window(o.width, o.heigh
   renderer = std::make_unique<render::Renderer>();
   renderSettings.shadowMapSize = 1024;
   speed = o.speed;
-  playing = !o.paused || o.headless();
+  playing = !o.paused;
+  sway = o.sway;
   openFile(o.input.empty() ? std::filesystem::path(TENDRIL_EXAMPLES_DIR) / "scenes/default.json"
                            : std::filesystem::path(o.input));
   if (!o.select.empty()) {
@@ -90,6 +91,7 @@ void Studio::Impl::openFile(const std::filesystem::path& path) {
   meshesChanged = true;
   obstacleRevision = session->obstacleRevision();
   cameraFramed = false;
+  view.stopSway();
   nextSeed = session->plantCount() + 1;
   status = fmt::format("opened {}", path.string());
   statusIsError = false;
@@ -567,6 +569,9 @@ int Studio::Impl::run() {
       obstacleRevision = session->obstacleRevision();
     }
     view.update(*session, selection, meshesChanged, showAir);
+    // Wind motion on the clock of the frames (1/60 s each, so headless runs are reproducible).
+    if (sway) view.sway(*session, float(frameCount) / 60.0f, 1.0f / 60.0f);
+    else view.stopSway();
     meshesChanged = false;
     updateStress();
     view.applyStress();

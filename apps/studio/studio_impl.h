@@ -110,6 +110,7 @@ struct Studio::Impl {
   std::unordered_map<uint32_t, float> strainAtDragStart;  // held part (models::Grip handle) → strain when it began
   bool playing = true;
   bool showAir = true;  // the simulated air's streaks (wind mode sph)
+  bool sway = true;     // plants sway and their leaves move in the wind (wind panel)
   int speed = 1;
   bool meshesChanged = true;
   uint64_t obstacleRevision = 0;  // the session's when the viewport last fetched obstacle meshes

@@ -12,6 +12,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -165,6 +166,64 @@ TEST(StudioHeadless, ReplaysSeedPaintDragCutAndShowsTheOutcome) {
     session::runEditScript(editor, session::loadEditScript(kTestDir / script), frames * speed);
     EXPECT_EQ(reportedSegments(err), long(session->segmentCount())) << script << ": " << err;
   }
+}
+
+// Viewport pixels (as greenViewportPixels) that differ between two screenshots, and their
+// bounding box.
+struct ViewportDifference {
+  int pixels = 0;
+  int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+};
+ViewportDifference viewportDifference(const io::Image& a, const io::Image& b) {
+  ViewportDifference d;
+  for (int y = 30; y < a.height - 70; ++y)
+    for (int x = 290; x < a.width - 380; ++x) {
+      const uint8_t *p = a.pixel(x, y), *q = b.pixel(x, y);
+      if (std::abs(int(p[0]) - int(q[0])) + std::abs(int(p[1]) - int(q[1])) + std::abs(int(p[2]) - int(q[2])) <= 6) continue;
+      ++d.pixels;
+      d.x0 = std::min(d.x0, x), d.y0 = std::min(d.y0, y), d.x1 = std::max(d.x1, x), d.y1 = std::max(d.y1, y);
+    }
+  return d;
+}
+
+TEST(StudioHeadless, PlantsSwayInTheWindWhereTheyStand) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  const fs::path scene = kTestDir / "sway.json";
+  // Paused: nothing grows, so what changes from frame 20 to frame 32 is the wind's motion.
+  auto shot = [&](int frames, const std::string& extra, const std::string& name) {
+    std::string out, err;
+    EXPECT_EQ(runStudio(dir,
+                        quoted(scene) + " --paused --frames " + std::to_string(frames) + " --size 1200x700 " + extra +
+                            " --screenshot " + quoted(dir / name),
+                        true, &out, &err),
+              0)
+        << err;
+    return io::readImage(dir / name);
+  };
+  const io::Image a = shot(20, "", "a.png"), b = shot(32, "", "b.png");
+  const io::Image stillA = shot(20, "--no-sway", "still-a.png"), stillB = shot(32, "--no-sway", "still-b.png");
+  ASSERT_EQ(a.width, 1200);
+  const int leaves = greenViewportPixels(stillA);
+  ASSERT_GT(leaves, 2000) << "the willow's leaves are in view";
+  EXPECT_EQ(viewportDifference(stillA, stillB).pixels, 0) << "without sway a paused scene does not change";
+  const ViewportDifference moved = viewportDifference(a, b);
+  EXPECT_GT(moved.pixels, leaves / 20) << "the willow sways and its leaves move";
+  // ... and only where the plant (and its shadow under it) is: the box of the changed pixels
+  // lies within the box of the plant in either frame, widened by a tenth of the viewport.
+  int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+  for (const io::Image* image : {&a, &b, &stillA})
+    for (int y = 30; y < image->height - 70; ++y)
+      for (int x = 290; x < image->width - 380; ++x) {
+        const uint8_t* p = image->pixel(x, y);
+        if (p[1] > p[0] + 12 && p[1] > p[2] + 12 && p[2] * 5 < p[1] * 4)
+          x0 = std::min(x0, x), y0 = std::min(y0, y), x1 = std::max(x1, x), y1 = std::max(y1, y);
+      }
+  const int margin = (a.width - 290 - 380) / 10;
+  EXPECT_GE(moved.x0, x0 - margin);
+  EXPECT_LE(moved.x1, x1 + margin);
+  EXPECT_GE(moved.y0, y0 - margin);
+  EXPECT_LE(moved.y1, y1 + margin);
 }
 
 TEST(StudioHeadless, ShowsTheSimulatedAir) {
