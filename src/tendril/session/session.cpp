@@ -5,6 +5,7 @@
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
 #include "tendril/env/mesh_import.h"
+#include "tendril/models/stand_off.h"
 #include "tendril/scene/settings_schema.h"
 
 #include <fmt/format.h>
@@ -178,6 +179,8 @@ std::vector<plant::PlantModel> Session::plants() const {
   std::vector<plant::PlantModel> out;
   out.reserve(plants_.size());
   for (const PlantRef& r : plants_) out.push_back(std::move(bySystem[r.system].at(r.index)));
+  // Every model's stems, thickened since they were placed, clear of their supports.
+  for (plant::PlantModel& p : out) models::keepStemsOutside(p, *env_);
   return out;
 }
 

@@ -1,0 +1,21 @@
+// Stems that stay outside their support as they thicken. A growth model places a stem's
+// centreline off the surfaces it climbs at the radius the stem has when it is born; stems then
+// thicken (the pipe model, secondary growth, Growth-Flow's eq. 7), and a thick stem pressed
+// against a wall grows away from it. keepStemsOutside moves each node's points out of the
+// nearest surface until the ring of bark around it clears it, for every model's plants alike.
+#pragma once
+
+#include "tendril/env/environment.h"
+#include "tendril/plant/plant_model.h"
+
+namespace tendril::models {
+
+// Moves the start of every node (and the tip of every node that ends a chain) along the normal
+// of the nearest obstacle surface until the bark ring there — radius r, perpendicular to the
+// segment — keeps `margin` (plus 1 % of r) off it. A ring lying in the surface (a trunk
+// standing on the ground) needs no clearance. Lengths and orientations follow the moved
+// points; leaves keep their world rotation and move with their node's start. Returns the
+// number of points moved.
+size_t keepStemsOutside(plant::PlantModel& plant, const env::Environment& env, float margin = 1e-4f);
+
+}  // namespace tendril::models
