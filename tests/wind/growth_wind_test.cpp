@@ -231,17 +231,18 @@ TEST(GrowthFlowParticles, WindAboveMaxGivesShorterThickerSmallerLeavedPlantsTurn
     if (calm.parent[i] >= 0) calmHasChild[size_t(calm.parent[i])] = true;
 
   // Eq. 8: a full-grown internode (one with a successor) of generation g is 0.97^g of the
-  // species' particle length (0.05 m); in still air every one is 0.05 m.
+  // species' particle length (0.05 m); in still air every one is 0.05 m. (An apex counts as
+  // grown at 99.9 % of its length, and a stem lying on the wall is lifted off it by its radius,
+  // models/stand_off.h, which changes its length by up to another 0.1 %.)
   size_t checked = 0;
   for (size_t i = 1; i < windy.nodeCount(); ++i) {
     if (!hasChild[i]) continue;
-    // (an apex counts as grown at 99.9 % of its length)
-    EXPECT_NEAR(windy.length[i] / (0.05 * std::pow(0.97, gw[i])), 1.0, 1.1e-3) << "node " << i << ", generation " << gw[i];
+    EXPECT_NEAR(windy.length[i] / (0.05 * std::pow(0.97, gw[i])), 1.0, 2e-3) << "node " << i << ", generation " << gw[i];
     ++checked;
   }
   for (size_t i = 1; i < calm.nodeCount(); ++i) {
     if (calmHasChild[i]) {
-      EXPECT_NEAR(calm.length[i] / 0.05, 1.0, 1.1e-3) << "node " << i;
+      EXPECT_NEAR(calm.length[i] / 0.05, 1.0, 2e-3) << "node " << i;
     }
   }
   EXPECT_GT(checked, 50u);
@@ -305,16 +306,16 @@ TEST(GrowthFlowParticles, WindBelowMinChangesNothing) {
 }
 
 
-plant::PlantModel growLSystem(const std::string& wind, const std::string& growthFlow = "") {
+plant::PlantModel growLSystem(const std::string& wind, const std::string& growthFlow = "", int steps = 30) {
   // ABOP's Lychnis coronaria: internodes and leaves that, once made, stay in the string.
-  std::string json = std::string(R"({"tendril": 1, "seed": 4, "steps": 30,
-    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [4, 4]}], "wind": )") + wind +
+  std::string json = std::string(R"({"tendril": 1, "seed": 4, "steps": )") + std::to_string(steps) + R"(,
+    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [4, 4]}], "wind": )" + wind +
                      R"(},
     "plants": [{"name": "lychnis", "model": "lsystem", "grammar": "examples/grammars/abop-ch3-lychnis.ls",
                 "position": [0, 0, 0])" + growthFlow + R"(}]})";
   scene::Scene s = scene::parseScene(parseJson(json, "test scene"), "test scene", test::sourceDir());
   session::Session session(std::move(s));
-  session.run(30);
+  session.run(uint32_t(steps));
   return session.plants()[0];
 }
 
@@ -326,39 +327,72 @@ TEST(GrowthFlowLSystem, OrgansCarryTheFactorsOfTheWindTheyGrewIn) {
   ASSERT_EQ(windy.leafCount(), calm.leafCount());
   ASSERT_GT(calm.nodeCount(), 100u);
   ASSERT_GT(calm.leafCount(), 10u);
-  // An organ t derivation steps old has grown t units in the wind: eq. 8, 7, 17, 16.
+  // An organ born at step b grew in the wind of the growth_units (10) steps before it: eq. 8,
+  // 7, 17, 16 over u = min(b − 1, 10) units (the wind blows from the first step on). The
+  // derivation stops at the grammar's length D; the oldest organs were born in its first step
+  // (b = 1, age D − 1), so b − 1 = oldest age − age.
+  const double oldest = *std::max_element(calm.age.begin(), calm.age.end());
+  auto units = [oldest](double age) { return std::clamp(oldest - age, 0.0, 10.0); };
   size_t aged = 0;
   for (size_t i = 0; i < calm.nodeCount(); ++i) {
-    const double t = calm.age[i];
+    const double u = units(calm.age[i]);
     ASSERT_EQ(windy.age[i], calm.age[i]);
-    EXPECT_NEAR(windy.length[i] / calm.length[i], std::pow(0.97, t), 1e-5) << "node " << i << ", age " << t;
-    EXPECT_NEAR(windy.radius[i] / calm.radius[i], std::pow(1.015 / 1.01, t), 1e-5) << "node " << i;
-    aged += t >= 10;
+    EXPECT_NEAR(windy.length[i] / calm.length[i], std::pow(0.97, u), 1e-5) << "node " << i << ", age " << calm.age[i];
+    EXPECT_NEAR(windy.radius[i] / calm.radius[i], std::pow(1.015 / 1.01, u), 1e-5) << "node " << i;
+    aged += u >= 10;
   }
   EXPECT_GT(aged, 20u);
-  // A leaf's age is not its segment's (internodes elongate below it), so read its age t from
-  // eq. 16 and check that it is a whole number of steps and that eq. 17 gives the same t.
+  // A leaf's age is not its segment's (internodes elongate below it), so read its units u from
+  // eq. 16 and check that it is a whole number of steps and that eq. 17 gives the same u.
   size_t agedLeaves = 0;
   for (size_t j = 0; j < calm.leafCount(); ++j) {
     const double thicker = double(windy.leafThickness[j]) / double(calm.leafThickness[j]);
-    const double t = std::log(thicker) / std::log(1.015 / 1.01);
-    EXPECT_NEAR(t, std::round(t), 1e-2) << "leaf " << j;
-    EXPECT_NEAR(windy.leafSize[j] / calm.leafSize[j], std::pow(0.98, std::round(t)), 1e-5) << "leaf " << j;
-    agedLeaves += std::round(t) >= 5;
+    const double u = std::log(thicker) / std::log(1.015 / 1.01);
+    EXPECT_NEAR(u, std::round(u), 1e-2) << "leaf " << j;
+    EXPECT_LE(std::round(u), 10.0) << "leaf " << j;
+    EXPECT_NEAR(windy.leafSize[j] / calm.leafSize[j], std::pow(0.98, std::round(u)), 1e-5) << "leaf " << j;
+    agedLeaves += std::round(u) >= 5;
   }
   EXPECT_GT(agedLeaves, 5u);
-  // Eq. 9 and Algorithm 1: a segment t steps old is drawn turned toward the wind (+X) by
-  // α_t = 2° · 1.1^t from its still-air heading (which the turtle keeps), never past the wind.
+  // Eq. 9 and Algorithm 1: a segment is drawn turned toward the wind (+X) by the angle its
+  // growth reached, α = 2° · 1.1^u, from its still-air heading (which the turtle keeps).
   size_t turned = 0;
   for (size_t i = 0; i < calm.nodeCount(); ++i) {
     const double still = std::acos(std::clamp(double(calm.direction(i).x()), -1.0, 1.0));
     const double bent = std::acos(std::clamp(double(windy.direction(i).x()), -1.0, 1.0));
-    const double alpha =
-        calm.age[i] > 0.0f ? std::min(double(kPi), 2.0 * double(kPi) / 180.0 * std::pow(1.1, double(calm.age[i]))) : 0.0;
+    const double u = units(calm.age[i]);
+    const double alpha = u > 0.0 ? 2.0 * double(kPi) / 180.0 * std::pow(1.1, u) : 0.0;
     EXPECT_NEAR(bent, std::max(0.0, still - alpha), 2e-3) << "node " << i << ", age " << calm.age[i];
-    turned += alpha > 10.0 * double(kPi) / 180.0 && still > alpha;
+    turned += alpha > 5.0 * double(kPi) / 180.0 && still > alpha;
   }
   EXPECT_GT(turned, 10u);
+}
+
+TEST(GrowthFlowLSystem, MatureOrgansKeepWhatTheyGrewWhileTheWindGoesOn) {
+  // Ten more steps in a storm: every segment and leaf of the plant at step 16 is still there
+  // at the end of the derivation (step D, its oldest organs D − 1 steps old) with the length,
+  // radius and leaf size it had (a model that applied the wind over an organ's whole life would
+  // shrink them by another 0.97^(D − 16)).
+  const char* storm = R"({"velocity": [20, 0, 0]})";
+  const plant::PlantModel before = growLSystem(storm, "", 16), after = growLSystem(storm, "", 30);
+  const float oldest = *std::max_element(after.age.begin(), after.age.end());
+  ASSERT_GE(oldest, 20.0f);
+  const float bornBy16 = oldest + 1.0f - 16.0f;  // the age at step D of an organ born at step 16
+  std::vector<std::pair<float, float>> then, now;
+  for (size_t i = 0; i < before.nodeCount(); ++i) then.emplace_back(before.length[i], before.radius[i]);
+  for (size_t i = 0; i < after.nodeCount(); ++i)
+    if (after.age[i] >= bornBy16) now.emplace_back(after.length[i], after.radius[i]);
+  std::sort(then.begin(), then.end());
+  std::sort(now.begin(), now.end());
+  ASSERT_GT(then.size(), 50u);
+  EXPECT_EQ(now, then);
+  // Leaves (their node is not their age): every leaf size of step 16 is among those at step D.
+  std::vector<float> leavesThen(before.leafSize.begin(), before.leafSize.end());
+  std::vector<float> leavesNow(after.leafSize.begin(), after.leafSize.end());
+  std::sort(leavesThen.begin(), leavesThen.end());
+  std::sort(leavesNow.begin(), leavesNow.end());
+  ASSERT_GT(leavesThen.size(), 5u);
+  EXPECT_TRUE(std::includes(leavesNow.begin(), leavesNow.end(), leavesThen.begin(), leavesThen.end()));
 }
 
 TEST(GrowthFlowLSystem, WindBelowMinChangesNothingAndStrongWindTearsLeavesOff) {

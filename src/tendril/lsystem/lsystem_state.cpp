@@ -7,7 +7,7 @@ namespace tendril::lsystem {
 
 namespace {
 
-constexpr uint32_t kLSystemTag = 0x53594c31;  // "1LYS"
+constexpr uint32_t kLSystemTag = 0x53594c32;  // "2LYS" (2: the wind of every unit)
 
 }  // namespace
 
@@ -28,7 +28,7 @@ void LSystem::saveState(ArchiveWriter& out) const {
   out.vector(wind_.sums());
   out.vector(wind_.activeCounts());
   out.vector(wind_.tornCounts());
-  out.value(wind_.latestWind());
+  out.vector(wind_.winds());
 }
 
 void LSystem::loadState(ArchiveReader& in) {
@@ -58,10 +58,10 @@ void LSystem::loadState(ArchiveReader& in) {
   auto sums = in.vector<plant::GrowthFlowHistory::Sums>();
   auto active = in.vector<uint32_t>();
   auto torn = in.vector<uint32_t>();
-  const Vec3 latest = in.value<Vec3>();
-  if (sums.empty() || sums.size() != active.size() || sums.size() != torn.size())
+  auto winds = in.vector<Vec3>();
+  if (sums.empty() || sums.size() != active.size() || sums.size() != torn.size() || sums.size() != winds.size())
     in.fail(windAt, "the saved L-system's wind history is inconsistent");
-  wind_.restore(std::move(sums), std::move(active), std::move(torn), latest);
+  wind_.restore(std::move(sums), std::move(active), std::move(torn), std::move(winds));
 }
 
 }  // namespace tendril::lsystem

@@ -292,28 +292,30 @@ class Turtle {
       moveTo(id, p, n, s.pos + s.h * len);
       return;
     }
-    if (!draw) {
-      moveTo(id, p, n, s.pos + s.h * len);
-      s.newChain = true;  // a gap: the next segment begins a new chain
-      return;
-    }
-    orthonormalize();
+    if (draw) orthonormalize();
+    // Growth-Flow (Algorithm 1): a segment, drawn or not, grows shorter and turned toward the
+    // wind it grew in; it keeps that once grown. The turtle keeps its still-air frame.
     const plant::GrowthFlowHistory::Factors flow = windFactors();
     Vec3 stillH, stillL, stillU;
     bool turned = false;
     if (flow.active) {
       len *= flow.length;
       if (o_.growthFlow->maxLength > 0.0f) len = std::min(len, o_.growthFlow->maxLength);
-      const Vec3 bent = plant::windGrowthDirection(s.h, o_.wind->latestWind(), flow.angle);
-      if (bent != s.h) {
+      const Quat turn = windTurn(s.h, s.u, s.climbing, flow);
+      if (turn.w() < 1.0f) {
         stillH = s.h, stillL = s.l, stillU = s.u;
         turned = true;
-        const Quat turn = Quat::FromTwoVectors(s.h, bent);
-        s.h = bent;
+        s.h = (turn * s.h).normalized();
         s.l = (turn * s.l).normalized();
         s.u = (turn * s.u).normalized();
         orthonormalize();
       }
+    }
+    if (!draw) {
+      moveTo(id, p, n, s.pos + s.h * len);
+      s.newChain = true;  // a gap: the next segment begins a new chain
+      if (turned) s.h = stillH, s.l = stillL, s.u = stillU;
+      return;
     }
     if (mode_ == Mode::Build) {
       if (!(s.width > 0.0f)) fail(id, p, n, fmt::format("segments need a width > 0, the turtle's is {:g} (set by ! or width:)", s.width));
@@ -472,7 +474,36 @@ class Turtle {
   // Growth-Flow factors of the module being drawn (see InterpretOptions::wind).
   plant::GrowthFlowHistory::Factors windFactors() const {
     if (!o_.wind || !o_.growthFlow) return {};
-    return o_.wind->since(birth_, o_.step, *o_.growthFlow);
+    return o_.wind->organ(birth_, o_.step, *o_.growthFlow);
+  }
+
+  // The rotation from a still-air heading h to the one an organ with these factors grew along
+  // (Algorithm 1). A climbing shoot (@Climb, its up vector u facing away from its support) is
+  // pressed against its support by a wind blowing into it, not turned into it: its heading
+  // never dips further toward the support than the still-air heading does.
+  static Quat windTurn(const Vec3& h, const Vec3& u, bool climbing, const plant::GrowthFlowHistory::Factors& flow) {
+    if (!flow.active || !(flow.angle > 0.0f) || flow.wind.squaredNorm() == 0.0f) return Quat::Identity();
+    Vec3 bent = plant::windGrowthDirection(h, flow.wind, flow.angle);
+    if (climbing) {
+      const float floor = std::min(h.dot(u), 0.0f), below = bent.dot(u) - floor;
+      if (below < 0.0f) {
+        bent -= below * u;
+        if (!(bent.squaredNorm() > 1e-12f)) return Quat::Identity();
+        bent.normalize();
+      }
+    }
+    return bent == h ? Quat::Identity() : Quat::FromTwoVectors(h, bent);
+  }
+
+  // The direction of the next segment as it will grow (the wind turns it): the heading ?E
+  // probes along, so a probe looks where the plant will grow. ?H, ?U and ?L report the
+  // still-air frame, the one the grammar's tropisms steer (Algorithm 1).
+  Vec3 nextHeading() const {
+    const State& s = state_;
+    const Vec3 h = s.h.normalized();
+    if (!o_.wind || !o_.growthFlow) return h;
+    const Quat turn = windTurn(h, s.u.normalized(), s.climbing, o_.wind->organ(o_.step + 1, o_.step, *o_.growthFlow));
+    return (turn * h).normalized();
   }
 
   void leaf(ModuleId id, const float* p, uint32_t n) {
@@ -530,7 +561,7 @@ class Turtle {
       case TurtleOp::QueryEnvironment:
         // The axiom, productions and decompositions that emitted it checked kind and count.
         assert(queryProblem(p[0], int(n)).empty());
-        requests_.push_back({stringIndex, QueryKind(int(p[0])), s.pos, s.h.normalized()});
+        requests_.push_back({stringIndex, QueryKind(int(p[0])), s.pos, nextHeading()});
         return;
       default: return;
     }

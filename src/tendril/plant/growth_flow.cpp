@@ -38,6 +38,7 @@ void readGrowthFlow(JsonObject& o, GrowthFlowSpecies& s) {
   s.dragCoefficient = o.numberf("drag_coefficient", s.dragCoefficient, 0.0, 10.0);
   s.leafMass = o.numberf("leaf_mass", s.leafMass, 0.0, 10.0);
   s.maxSwayAngle = o.angle("max_sway_angle", degrees(s.maxSwayAngle), 0.0, 90.0);
+  s.growthUnits = uint32_t(o.integer("growth_units", s.growthUnits, 1, 100000));
   o.finish();
 }
 
@@ -119,35 +120,37 @@ void GrowthFlowHistory::record(const Vec3& wind, const GrowthFlowSpecies& s) {
   sums_.push_back(next);
   active_.push_back(active_.back() + (g.active() ? 1u : 0u));
   torn_.push_back(torn_.back() + (g.active() && leafDetaches(speed, s) ? 1u : 0u));
-  wind_ = wind;
+  winds_.push_back(wind);
 }
 
-GrowthFlowHistory::Factors GrowthFlowHistory::since(uint32_t birth, uint32_t now, const GrowthFlowSpecies& s) const {
+GrowthFlowHistory::Factors GrowthFlowHistory::organ(uint32_t birth, uint32_t now, const GrowthFlowSpecies& s) const {
   Factors f;
   now = std::min(now, units());
-  birth = std::min(birth, now);
-  f.active = active_[now] > active_[birth];
+  const uint32_t end = std::min(birth > 0 ? birth - 1 : 0u, now);  // its last unit of growth
+  const uint32_t start = end - std::min(end, s.growthUnits);        // units start+1 … end
+  f.torn = torn_[now] > torn_[start];
+  f.active = active_[end] > active_[start];
   if (!f.active) return f;  // exactly the still-air organ
-  f.torn = torn_[now] > torn_[birth];
-  const Sums& a = sums_[birth];
-  const Sums& b = sums_[now];
+  const Sums& a = sums_[start];
+  const Sums& b = sums_[end];
   f.radius = float(std::exp(b.radius - a.radius));
   f.length = float(std::exp(b.length - a.length));
   f.leafThickness = float(std::exp(b.leafThickness - a.leafThickness));
   f.leafRadius = float(std::exp(b.leafRadius - a.leafRadius));
   // eq. 9 from α_0 over the windy units: α_t = α_0 Π (1 + Δα), at most π.
   f.angle = float(std::min(double(kPi), double(s.angle0) * std::exp(b.angle - a.angle)));
+  f.wind = winds_[end];
   return f;
 }
 
 void GrowthFlowHistory::restore(std::vector<Sums> sums, std::vector<uint32_t> active, std::vector<uint32_t> torn,
-                                const Vec3& wind) {
-  if (sums.empty() || sums.size() != active.size() || sums.size() != torn.size())
+                                std::vector<Vec3> winds) {
+  if (sums.empty() || sums.size() != active.size() || sums.size() != torn.size() || sums.size() != winds.size())
     throw Error("", "", "inconsistent Growth-Flow history");
   sums_ = std::move(sums);
   active_ = std::move(active);
   torn_ = std::move(torn);
-  wind_ = wind;
+  winds_ = std::move(winds);
 }
 
 }  // namespace tendril::plant

@@ -77,6 +77,9 @@ struct GrowthFlowSpecies {
   float dragCoefficient = 1.2f;
   float leafMass = 0.002f;  // kg per leaf for the drag it adds (branch mass = 10 × this per node)
   float maxSwayAngle = radians(20.0f);  // per node, on top of the limit acos(b·w) of §3.1.1
+  // Units of growth time an organ of a re-read string (L-system) grows in before it appears;
+  // it keeps the factors of those units for the rest of its life (GrowthFlowHistory).
+  uint32_t growthUnits = 10;
 
 };
 
@@ -121,9 +124,12 @@ inline bool leafDetaches(float w, const GrowthFlowSpecies& s) {
 }
 
 // The wind a whole plant grew in, one record per unit of growth time, for models whose organs
-// are not grown one at a time but live in a string that is re-read (L-systems): an organ born
-// at unit b and seen at unit t has grown through units b+1 … t, and since(b, t) gives the
-// product of those units' growthStep factors (prefix sums of logarithms: O(1) per organ).
+// are not grown one at a time but live in a string that is re-read (L-systems). An organ grows
+// in the `growthUnits` units before the one it appears in and then keeps what it got (mature
+// wood does not shrink nor turn): organ(b, t) gives, for an organ born at unit b seen at unit t,
+// the product of those units' growthStep factors (prefix sums of logarithms: O(1) per organ),
+// the growth angle eq. 9 reached over them and the wind of the last one, which it turned toward.
+// Tearing (Algorithm 2) is damage, not growth: a leaf is torn by any unit from its growth on.
 class GrowthFlowHistory {
  public:
   struct Factors {
@@ -134,16 +140,19 @@ class GrowthFlowHistory {
     float leafThickness = 1.0f;  // eq. 16
     float leafRadius = 1.0f;     // eq. 17
     float angle = 0.0f;          // eq. 9's α_t (0 when not active)
+    Vec3 wind = Vec3::Zero();    // the wind of the organ's last unit of growth (eq. 9 turns toward it)
   };
 
   // Appends one unit of growth time in `wind`.
   void record(const Vec3& wind, const GrowthFlowSpecies& s);
   // Units recorded so far.
   uint32_t units() const { return uint32_t(active_.size() - 1); }
-  // Factors of an organ born at unit `birth` (0 = before the first) seen at unit `now`.
-  Factors since(uint32_t birth, uint32_t now, const GrowthFlowSpecies& s) const;
-  // The wind of the latest unit (eq. 9 turns toward it); zero before the first.
-  const Vec3& latestWind() const { return wind_; }
+  // Factors of an organ born at unit `birth` (0 = before the first) seen at unit `now`: its
+  // growth over units birth − growthUnits … birth − 1, and tearing over those up to `now`.
+  // organ(now + 1, now) is what the next organ to appear will get.
+  Factors organ(uint32_t birth, uint32_t now, const GrowthFlowSpecies& s) const;
+  // The wind of unit u (zero for u = 0, before the first).
+  const Vec3& windAt(uint32_t u) const { return winds_[std::min<size_t>(u, winds_.size() - 1)]; }
   // Every member, for saving and restoring a plant's state.
   struct Sums {
     double radius = 0, length = 0, leafThickness = 0, leafRadius = 0, angle = 0;
@@ -151,13 +160,15 @@ class GrowthFlowHistory {
   const std::vector<Sums>& sums() const { return sums_; }
   const std::vector<uint32_t>& activeCounts() const { return active_; }
   const std::vector<uint32_t>& tornCounts() const { return torn_; }
-  void restore(std::vector<Sums> sums, std::vector<uint32_t> active, std::vector<uint32_t> torn, const Vec3& wind);
+  const std::vector<Vec3>& winds() const { return winds_; }
+  void restore(std::vector<Sums> sums, std::vector<uint32_t> active, std::vector<uint32_t> torn,
+               std::vector<Vec3> winds);
 
  private:
   std::vector<Sums> sums_{Sums{}};    // prefix sums of log factors, entry u = units 1 … u
   std::vector<uint32_t> active_{0};  // prefix counts of units with f > 0
   std::vector<uint32_t> torn_{0};    // prefix counts of units that tear leaves off
-  Vec3 wind_ = Vec3::Zero();
+  std::vector<Vec3> winds_{Vec3::Zero()};  // entry u = unit u's wind
 };
 
 // eq. 10–15: one angle with its direction of motion. Returns the new angle; flips `sign`
