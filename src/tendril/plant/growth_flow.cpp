@@ -37,6 +37,7 @@ void readGrowthFlow(JsonObject& o, GrowthFlowSpecies& s) {
   s.woodDensity = o.numberf("wood_density", s.woodDensity, 10.0, 5000.0);
   s.dragCoefficient = o.numberf("drag_coefficient", s.dragCoefficient, 0.0, 10.0);
   s.leafMass = o.numberf("leaf_mass", s.leafMass, 0.0, 10.0);
+  s.swayDamping = o.numberf("sway_damping", s.swayDamping, 0.01, 0.95);
   s.maxSwayAngle = o.angle("max_sway_angle", degrees(s.maxSwayAngle), 0.0, 90.0);
   s.growthUnits = uint32_t(o.integer("growth_units", s.growthUnits, 1, 100000));
   o.finish();

@@ -70,12 +70,15 @@ struct GrowthFlowSpecies {
   float bladeBendLimit = radians(10.0f);
   float twistLimit = radians(15.0f);
   float vibrateLimit = radians(5.0f);
-  // Branch sway (eq. 1): Young's modulus of the wood (Pa), density (kg/m³), drag coefficient;
-  // the mass of a branch is 10 times that of a leaf (§3.1.1).
+  // Branch sway (eq. 1, wind/motion.h): Young's modulus of the wood (Pa) for the resistivity K,
+  // its density (kg/m³) for a segment's mass (its wood: §3.1.1 sets a branch to 10 leaves
+  // "arbitrarily", we weigh it), the drag coefficient, a leaf's mass (kg), and the axial
+  // damping R as a damping ratio ζ (the fraction of critical damping).
   float youngModulus = 2.0e8f;
   float woodDensity = 700.0f;
   float dragCoefficient = 1.2f;
-  float leafMass = 0.002f;  // kg per leaf for the drag it adds (branch mass = 10 × this per node)
+  float leafMass = 0.002f;
+  float swayDamping = 0.15f;
   float maxSwayAngle = radians(20.0f);  // per node, on top of the limit acos(b·w) of §3.1.1
   // Units of growth time an organ of a re-read string (L-system) grows in before it appears;
   // it keeps the factors of those units for the rest of its life (GrowthFlowHistory).

@@ -14,7 +14,6 @@ namespace tendril::wind {
 
 namespace {
 
-constexpr uint64_t kPhasePurpose = purposeId("wind.sway-phase");
 constexpr uint64_t kLeafPurpose = purposeId("wind.leaf-motion");
 
 // Four nodes per pass of the drag (false: one at a time, for the tests).
@@ -116,12 +115,17 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
   const size_t n = rest_.nodeCount();
   nodes_.resize(n);
   stiffness_.resize(n);
+  inertia_.resize(n);
+  damping_.resize(n);
   std::vector<float> area(n);
   std::vector<uint8_t> held(n);
   std::vector<Vec3> direction(n);
   centre_.resize(n);
   force_.resize(n);
   moment_.resize(n);
+  torque_.assign(n, Vec3::Zero());
+  theta_.assign(n, Vec3::Zero());
+  omega_.assign(n, Vec3::Zero());
   speed_.resize(n);
   angle_.assign(n, 0.0f);
   Q_.assign(n, Quat::Identity());
@@ -150,13 +154,33 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
     mass[size_t(node)] += species_.leafMass;
   }
   for (size_t i = 0; i < n; ++i) area[i] += leafAreaOfNode[i];
-  // Subtree masses (children after parents, so a reverse pass sums them).
-  std::vector<float> carried = mass;
-  for (size_t i = n; i-- > 0;)
-    if (rest_.parent[i] >= 0) carried[size_t(rest_.parent[i])] += carried[i];
-
-  // Chains: a branch start (or root) and the nodes up to the next branch start share phase and
-  // period, set by the chain's base segment: 2π √(I / k), I = m l² / 3 with m all it carries.
+  // Moments of inertia about each node of all it carries: its own segment (m l² / 3 about its
+  // end) and, as point masses at their centres of gravity, every node further out. Sums over a
+  // subtree of m, m c and m |c|² (children after parents, so a reverse pass adds them up), in
+  // double: Σ m |c − p|² = Σ m |c|² − 2 p · Σ m c + |p|² Σ m.
+  std::vector<double> m0(n, 0.0), m2(n, 0.0);
+  std::vector<Eigen::Vector3d> m1(n, Eigen::Vector3d::Zero());
+  for (size_t i = n; i-- > 0;) {
+    const int32_t q = rest_.parent[i];
+    if (q < 0) continue;
+    const Eigen::Vector3d c = centre_[i].cast<double>();
+    m0[size_t(q)] += m0[i] + mass[i];
+    m1[size_t(q)] += m1[i] + double(mass[i]) * c;
+    m2[size_t(q)] += m2[i] + double(mass[i]) * c.squaredNorm();
+  }
+  const float zeta = std::clamp(species_.swayDamping, 0.01f, 0.95f);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = rest_.position[i].cast<double>();
+    const double l = rest_.length[i];
+    const double own = double(mass[i]) * l * l / 3.0;
+    const double carried = std::max(0.0, m2[i] - 2.0 * p.dot(m1[i]) + p.squaredNorm() * m0[i]);
+    const double k = std::max(double(stiffness_[i]), 1e-12);
+    // The natural period 2π √(I / k) within its limits (I scaled; θ* = τ / k is not).
+    const double lo = k * std::pow(kMinSwayPeriod / kTwoPi, 2), hi = k * std::pow(kMaxSwayPeriod / kTwoPi, 2);
+    const double I = std::clamp(own + carried, lo, hi);
+    inertia_[i] = float(I);
+    damping_[i] = float(2.0 * zeta * std::sqrt(k * I));
+  }
   for (size_t i = 0; i < n; ++i) {
     const int32_t p = rest_.parent[i];
     SwayNode& r = nodes_[i];
@@ -164,27 +188,11 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
     r.parent = p;
     r.offset = p < 0 ? rest_.position[i] : Vec3(rest_.position[i] - rest_.position[size_t(p)]);
     r.axis = Vec3::UnitX();
-    r.steady = 0.0f;
+    r.target = Vec3::Zero();
     r.sinToWind = 0.0f;
     r.cosToWind = 1.0f;
-    const bool start = p < 0 || (rest_.flags[i] & plant::kNodeBranchStart);
-    if (!start) {
-      r.chain = nodes_[size_t(p)].chain;
-      continue;
-    }
-    r.chain = uint32_t(chainPeriod_.size());
-    float l = std::max(rest_.length[i], 1e-3f);
-    float inertia = carried[i] * l * l / 3.0f;
-    float period = kTwoPi * std::sqrt(inertia / std::max(stiffness_[i], 1e-12f));
-    period = std::clamp(period, 0.4f, 6.0f);  // keep sway visible and calm for extreme species
-    if (settings_.loopSeconds > 0.0f) {
-      float cycles = std::max(1.0f, std::round(settings_.loopSeconds / period));
-      period = settings_.loopSeconds / cycles;
-    }
-    chainPeriod_.push_back(period);
-    chainPhase_.push_back(Rng(RandomKey{settings_.seed, 0, i, 0, kPhasePurpose}).uniform(0.0f, kTwoPi));
   }
-  ease_.resize(chainPeriod_.size());
+  held_ = held;
   leafKey_.resize(m);
   leafRest_.resize(m);
   for (size_t j = 0; j < m; ++j) leafRest_[j] = rest_.leafRotation[j].normalized();
@@ -236,6 +244,9 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
   for (SwayNode& r : nodes_)
     if (r.parent >= 0) r.parent = int32_t(internal_[size_t(r.parent)]);
   permute(stiffness_);
+  permute(inertia_);
+  permute(damping_);
+  permute(held_);
   permute(centre_);
   permute(pose_);
   for (uint32_t& i : mergeNodes_) i = internal_[i];
@@ -261,9 +272,15 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
 void WindMotion::setRest(const plant::PlantModel& rest) {
   const uint32_t frame = frame_;
   std::vector<plant::LeafMotionState> leaves = std::move(leaves_);
+  // The sway state by the plant's node index.
+  const size_t before = theta_.size();
+  std::vector<Vec3> theta(before), omega(before);
+  for (size_t i = 0; i < before; ++i) theta[i] = theta_[internal_[i]], omega[i] = omega_[internal_[i]];
   *this = WindMotion(rest, species_, settings_);
   frame_ = frame;
   for (size_t j = 0; j < leaves.size() && j < leaves_.size(); ++j) leaves_[j] = leaves[j];
+  for (size_t i = 0; i < before && i < theta_.size(); ++i)
+    if (!held_[internal_[i]]) theta_[internal_[i]] = theta[i], omega_[internal_[i]] = omega[i];
 }
 
 std::vector<Vec3> WindMotion::nodeTranslation() const {
@@ -398,35 +415,126 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
   for (size_t e = mergeNodes_.size(); e-- > 0;)
     if (nodes_[mergeNodes_[e]].parent >= 0) passBack(mergeNodes_[e]);
 
-  // The steady angle: the moment against the segment's spring (eq. 1 balanced by K), at most
-  // the species' limit.
+  // The torque τ, the moment less its twist about b (which turns a segment about itself, not
+  // its subtree), and the rotation θ* = τ / k it balances against the segment's spring.
   parallelFor(size_t(0), n, [&](size_t i) {
     SwayNode& r = nodes_[i];
-    r.steady = r.sinToWind >= 1e-6f ? std::min(moment_[i].norm() / stiffness_[i], species_.maxSwayAngle) : 0.0f;
+    if (held_[i]) {
+      torque_[i] = Vec3::Zero();
+      r.target = Vec3::Zero();
+      return;
+    }
+    const DragBlock& B = dragBlocks_[i / 4];
+    const size_t l = i % 4;
+    const Vec3 d(B.direction.x[l], B.direction.y[l], B.direction.z[l]);
+    const Vec3 tau = moment_[i] - moment_[i].dot(d) * d;
+    torque_[i] = tau;
+    r.target = tau * (1.0f / stiffness_[i]);
   }, 1024);
   uniformCached_ = uniform;
   uniformWind_ = ws.velocity;
 }
 
-void WindMotion::compose(float t, plant::PlantModel& posed) {
-  // The sinusoidal ease of each chain (§3.1.1): θ = θ* (1 − cos φ) / 2.
-  const float phi = kTwoPi * t;
-  parallelFor(size_t(0), chainPeriod_.size(), [&](size_t c) {
-    ease_[c] = 0.5f * (1.0f - std::cos(phi / chainPeriod_[c] + chainPhase_[c]));
+void WindMotion::integrate(float dt) {
+  const size_t n = nodes_.size();
+  if (!(dt > 0.0f)) return;
+  if (dt != stepDt_) {
+    // The damped oscillator over dt in closed form (ζ < 1): with ω_n = √(k / I), σ = ζ ω_n,
+    // ω_d = ω_n √(1 − ζ²), e = exp(−σ dt), C = cos ω_d dt, S = sin ω_d dt:
+    //   y(dt)  = e (y (C + σ/ω_d S) + y' S / ω_d)
+    //   y'(dt) = e (y' (C − σ/ω_d S) − y ω_n²/ω_d S).
+    step_.resize(n);
+    parallelFor(size_t(0), n, [&](size_t i) {
+      const double k = std::max(double(stiffness_[i]), 1e-12), I = inertia_[i];
+      const double wn = std::sqrt(k / I), sigma = double(damping_[i]) / (2.0 * I);
+      const double wd = std::sqrt(std::max(wn * wn - sigma * sigma, 1e-12 * wn * wn));
+      const double e = std::exp(-sigma * double(dt)), C = std::cos(wd * double(dt)), S = std::sin(wd * double(dt));
+      step_[i] = Step{float(e * (C + sigma / wd * S)), float(e * S / wd), float(-e * wn * wn / wd * S),
+                      float(e * (C - sigma / wd * S))};
+    }, 1024);
+    stepDt_ = dt;
+  }
+  const float limit = species_.maxSwayAngle;
+  parallelFor(size_t(0), n, [&](size_t i) {
+    const Step& k = step_[i];
+    const Vec3& target = nodes_[i].target;
+    const Vec3 y = theta_[i] - target, v = omega_[i];
+    Vec3 theta = target + k.a * y + k.b * v;
+    Vec3 omega = k.c * y + k.d * v;
+    // The species' limit is a stop: a node that reaches it rests there.
+    const float a2 = theta.squaredNorm();
+    if (a2 > limit * limit) {
+      theta *= limit / std::sqrt(a2);
+      omega = Vec3::Zero();
+    }
+    theta_[i] = theta;
+    omega_[i] = omega;
   }, 1024);
+}
 
-  // Parents first: node i's subtree turns about p_i on top of its parent's motion by the eased
-  // steady angle, toward the wind about u = b × w. A node never turns past the wind: the
-  // angles along its path are capped by its rest angle to the wind.
+void WindMotion::prepareSwayLoop(const env::WindField& wind) {
+  // The torque over one loop, sampled kLoopSamples times, as a Fourier series; harmonic h of
+  // the torque, A cos ω t + B sin ω t (ω = 2π h / L), moves the node by the oscillator's answer
+  // Re[H(ω) (A − iB) e^{iωt}], H(ω) = 1 / (k − I ω² + i c ω).
+  swayLoopReady_ = true;
+  const size_t n = nodes_.size();
+  constexpr int H = kLoopHarmonics, M = kLoopSamples, kCoefficients = 1 + 2 * H;
+  const float L = settings_.loopSeconds;
+  std::vector<Vec3> cosSum(n * (H + 1), Vec3::Zero()), sinSum(n * (H + 1), Vec3::Zero());
+  for (int sample = 0; sample < M; ++sample) {
+    computeTorques(L * float(sample) / float(M), wind);
+    parallelFor(size_t(0), n, [&](size_t i) {
+      for (int h = 0; h <= H; ++h) {
+        const double a = kTwoPi * double(h * sample % M) / double(M);
+        cosSum[i * (H + 1) + size_t(h)] += float(std::cos(a)) * torque_[i];
+        sinSum[i * (H + 1) + size_t(h)] += float(std::sin(a)) * torque_[i];
+      }
+    }, 1024);
+  }
+  loopSway_.assign(n * kCoefficients, Vec3::Zero());
+  parallelFor(size_t(0), n, [&](size_t i) {
+    const double k = std::max(double(stiffness_[i]), 1e-12), I = inertia_[i], c = damping_[i];
+    Vec3* out = &loopSway_[i * kCoefficients];
+    out[0] = cosSum[i * (H + 1)] * float(1.0 / (double(M) * k));
+    for (int h = 1; h <= H; ++h) {
+      const double w = kTwoPi * double(h) / double(L);
+      const double kr = k - I * w * w, ci = c * w, D = kr * kr + ci * ci;
+      const Vec3 A = cosSum[i * (H + 1) + size_t(h)] * float(2.0 / M), B = sinSum[i * (H + 1) + size_t(h)] * float(2.0 / M);
+      out[2 * h - 1] = (float(kr / D) * A - float(ci / D) * B);  // times cos ω t
+      out[2 * h] = (float(kr / D) * B + float(ci / D) * A);      // times sin ω t
+    }
+  }, 1024);
+}
+
+void WindMotion::evaluateSwayLoop(float t) {
+  constexpr int H = kLoopHarmonics, kCoefficients = 1 + 2 * H;
+  // t reduced to the loop first, so that t = loopSeconds poses as t = 0 exactly.
+  const float u = t / settings_.loopSeconds;
+  const double phase = double(u - std::floor(u));
+  float C[H + 1], S[H + 1];
+  for (int h = 1; h <= H; ++h) C[h] = float(std::cos(kTwoPi * phase * h)), S[h] = float(std::sin(kTwoPi * phase * h));
+  parallelFor(size_t(0), nodes_.size(), [&](size_t i) {
+    const Vec3* c = &loopSway_[i * kCoefficients];
+    Vec3 theta = c[0];
+    for (int h = 1; h <= H; ++h) theta += C[h] * c[2 * h - 1] + S[h] * c[2 * h];
+    theta_[i] = theta;
+  }, 1024);
+}
+
+void WindMotion::compose(plant::PlantModel& posed) {
+  // Parents first: node i's subtree turns about p_i on top of its parent's motion by its sway
+  // θ, at most the species' limit, and never past the wind: the angles toward the wind along
+  // its path are capped by its rest angle to the wind.
   // Plain pointers: Eigen's stores may alias anything, so members would be reloaded per node.
   const SwayNode* const nodes = nodes_.data();
-  const float* const ease = ease_.data();
+  const Vec3* const theta = theta_.data();
   Quat* const rotation = Q_.data();
   Pose* const pose = pose_.data();
   float* const angle = angle_.data();
   Vec3* const position = posed.position.data();
   Quat* const orientation = posed.orientation.data();
   const uint32_t* const order = order_.data();
+  const float limit = species_.maxSwayAngle;
   auto composeNode = [=](size_t i) {
     const SwayNode& r = nodes[i];
     Quat Qp = Quat::Identity();
@@ -440,17 +548,24 @@ void WindMotion::compose(float t, plant::PlantModel& posed) {
       // from the parent keeps round-off small far from the origin.
       p = pose[parent].position + Qp * r.offset;
     }
-    float a = r.steady > 0.0f ? r.steady * ease[r.chain] : 0.0f;
-    // §3.1.1's angle to the wind, acos(b·w / bw), is at least its sine: only a path turned
-    // further needs it exactly.
-    if (a > 0.0f && before + a > r.sinToWind) {
-      const float toWind = atan2Upper(r.sinToWind, r.cosToWind);
-      if (a > toWind - before) a = std::max(0.0f, toWind - before);
+    Vec3 th = theta[i];
+    float a = th.norm();
+    if (a > limit) th *= limit / a, a = limit;
+    // How far it turns toward the wind; §3.1.1's angle to the wind, acos(b·w / bw), is at least
+    // its sine: only a path turned further needs it exactly.
+    float toward = r.sinToWind > 0.0f ? th.dot(r.axis) : 0.0f;
+    if (toward > 0.0f && before + toward > r.sinToWind) {
+      const float room = std::max(0.0f, atan2Upper(r.sinToWind, r.cosToWind) - before);
+      if (toward > room) {
+        th *= room / toward;
+        a *= room / toward;
+        toward = room;
+      }
     }
-    const Quat Q = a > 0.0f ? renormalized(Qp * swayRotation(a, r.axis)) : Qp;
+    const Quat Q = a > 0.0f ? renormalized(Qp * swayRotation(a, th * (1.0f / a))) : Qp;
     angle[i] = a;
     rotation[i] = Q;
-    pose[i] = Pose{p, before + a};
+    pose[i] = Pose{p, before + toward};
     position[order[i]] = p;
     orientation[order[i]] = Q * r.restOrientation;  // both of unit length: so is the product
   };
@@ -547,8 +662,15 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   }
 
   // Branch sway; the posed nodes moved rigidly with their subtree transforms.
-  computeTorques(t, wind);
-  compose(t, posed);
+  if (settings_.loopSeconds > 0.0f) {
+    if (!swayLoopReady_) prepareSwayLoop(wind);
+    evaluateSwayLoop(t);
+    computeTorques(t, wind);  // the wind's direction at the nodes, for the limits
+  } else {
+    computeTorques(t, wind);
+    integrate(dt);
+  }
+  compose(posed);
 
   // Leaves: one motion type and one gust fraction per leaf and frame (Algorithm 2), in the wind
   // of the node they hang on (gusts vary over metres, a leaf is centimetres from its node).

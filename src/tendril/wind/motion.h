@@ -2,19 +2,33 @@
 // node centres, leaves bend, twist and vibrate, and leaves tear off in a wind above their
 // strength. Works on every model's output (climbing, L-system, graph, particle snapshots).
 //
-// Branch sway. For node i (a segment from p_i along b_i, b the vector from the node to the
-// segment's centre of gravity) eq. 1 gives the torque N = (F_w + K + R + T_r) × b: F_w is the
-// wind's drag on the segment and its leaves (½ ρ C_d A |w⊥| w⊥), T_r the force its child
-// branches pass back (their F_w + T_r), and the resistivity K and axial damping R are the
-// reaction of the wood. We treat K as the rotational spring of the segment, k = E π r⁴ / (4 l)
-// (a beam of Young's modulus E), so the torque of the wind balances it at θ* = |(F_w + T_r) × b|
-// / k; the angle is bounded by the angle to the wind, acos(b̂·ŵ) (§3.1.1), and by the
-// species' maxSwayAngle. The branch sways toward the wind and back with a sinusoidal ease-in
-// and ease-out (§3.1.1: θ = θ* (1 − cos φ) / 2), about the axis b × w, with the period of the
-// segment's spring and inertia (2π √(I / k), I = m l² / 3 with m its own and its children's
-// mass); nodes of one branch chain share phase and period so a branch moves as one, and R
-// shows as the ease-out. Nodes growing on a support (kNodeClimbing, kNodeAnchored) are held by
-// it and do not sway; their free children do. The gust fraction scales the whole torque.
+// Branch sway, eq. 1 as dynamics. For node i (a segment from p_i along b_i, b the vector from
+// the node to the segment's centre of gravity) eq. 1 gives the torque N = (F_w + K + R + T_r) × b:
+// F_w is the wind's drag on the segment and its leaves (½ ρ C_d A |w⊥| w⊥), T_r the force its
+// child branches pass back (their F_w + T_r, with its moment about p_i), K the resistivity and
+// R the axial damping. We read K as the rotational spring of the segment, k = E π r⁴ / (4 l)
+// (a beam of Young's modulus E), and R as a damper c = 2 ζ √(k I) (ζ: the species' sway
+// damping), so that the node's sway, a rotation vector θ about p_i perpendicular to b, obeys
+//     I θ'' + c θ' + k θ = τ(t),   τ = the wind's and the children's moment about p_i, less its
+//                                       twist about b,
+// where I is the moment of inertia about p_i of what the node carries: its own segment (m l² / 3)
+// and every segment and leaf further out (point masses at their centres of gravity; a segment's
+// mass is its wood, ρ_wood π r² l, a leaf's the species' leaf mass — the paper sets a branch to
+// 10 leaves "arbitrarily", we weigh the wood). The natural period 2π √(I / k) is kept within
+// [kMinSwayPeriod, kMaxSwayPeriod] by scaling I (the static deflection τ / k is unchanged), so
+// that sway stays visible and calm for extreme species. Frame to frame the ODE is solved
+// exactly for the torque held over the frame (the damped oscillator's closed form), so the
+// integration is stable for any frame length; a step in wind gives the damped response that
+// overshoots and settles at θ* = τ / k, and gusts keep the branch swinging toward the wind and
+// back: §3.1.1's ease-in/ease-out is the result. A node turns at most maxSwayAngle, and never
+// past the wind (its angle to the wind, acos(b̂·ŵ), less what its parents turned toward it).
+// Nodes growing on a support (kNodeClimbing, kNodeAnchored) are held by it and do not sway;
+// their free children do.
+//
+// Sway in a loop. With loopSeconds > 0 the wind repeats (gusts read on a circle in noise space),
+// and the node's sway is the periodic solution of the same ODE: the torque over one loop,
+// sampled kLoopSamples times, as a Fourier series of kLoopHarmonics harmonics, each answered by
+// the oscillator's frequency response. So the clip repeats exactly, at any frame rate.
 //
 // Leaves. Each frame every leaf gets one random motion type (1/3 each, §4) and a gust fraction
 // l_s ∈ [gustMin, 1] of the wind at its node; eq. 10–15 move its angles (growth_flow.h). A leaf's posed rotation is
@@ -35,8 +49,8 @@
 // simulated air at t = 0); leaves whose steady wind exceeds their strength are torn off from
 // the first frame. The glTF clip carries exactly this motion as morph targets (gltf_animation.h).
 //
-// Results depend only on the rest plant, the wind, the seed and the frame number: random
-// choices are keyed by (seed, leaf, frame).
+// Results depend only on the rest plant, the wind, the seed and the frames stepped (their
+// times and lengths): random choices are keyed by (seed, leaf, frame).
 #pragma once
 
 #include "tendril/env/wind_field.h"
@@ -82,22 +96,36 @@ struct MotionSettings {
   uint64_t seed = 1;
 };
 
+inline constexpr float kMinSwayPeriod = 0.4f, kMaxSwayPeriod = 6.0f;  // s
+inline constexpr int kLoopSamples = 32, kLoopHarmonics = 8;
+
 class WindMotion {
  public:
   WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpecies& species, MotionSettings settings = {});
 
   // Advances one frame to time t (s) with frame length dt and writes the posed plant (the rest
-  // plant with swayed nodes and moved leaves; detached leaves left out). Pass the same `posed`
+  // plant with swayed nodes and moved leaves; detached leaves left out). Without a loop the
+  // sway integrates eq. 1 over dt under the wind at t (dt ≤ 0: the pose is recomposed only);
+  // in a loop it is the periodic solution at t, whatever frames came before. Pass the same `posed`
   // frame after frame and leave it unchanged in between: what does not move (lengths, radii,
   // topology, primitive meshes) is copied from the rest plant only into a new `posed`.
   void step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed);
 
-  // The plant changed (it grew, or was edited): carry on with `rest` as the rest plant. Leaves
-  // that still exist keep their motion state.
+  // The plant changed (it grew, or was edited): carry on with `rest` as the rest plant. Nodes
+  // and leaves that still exist (by index) keep their motion state.
   void setRest(const plant::PlantModel& rest);
 
-  // Node i's sway angle in the last step (rad).
+  // Node i's sway angle in the last step (rad), as posed (after the limits).
   float swayAngle(size_t i) const { return angle_[internal_[i]]; }
+  // Node i's sway state: its rotation vector θ and angular velocity θ' (before the limits),
+  // and the coefficients of its eq. 1: I (kg m², after the period limits), c, k.
+  Vec3 swayVector(size_t i) const { return theta_[internal_[i]]; }
+  Vec3 swayVelocity(size_t i) const { return omega_[internal_[i]]; }
+  float inertia(size_t i) const { return inertia_[internal_[i]]; }
+  float damping(size_t i) const { return damping_[internal_[i]]; }
+  float stiffness(size_t i) const { return stiffness_[internal_[i]]; }
+  // The torque τ on node i in the last step (its moment less the twist about b), N m.
+  Vec3 torque(size_t i) const { return torque_[internal_[i]]; }
   const std::vector<plant::LeafMotionState>& leaves() const { return leaves_; }
   // The leaves' periodic motion of a looping clip, made at the first step or by
   // prepareLeafLoop (empty before, and without a loop).
@@ -113,17 +141,21 @@ class WindMotion {
 
  private:
   // What composing node i reads, in one record (one cache line): its rest frame, and the
-  // steady sway the wind gives it (set by computeTorques; kept while the wind is uniform and
-  // unchanged, as it then depends only on the rest plant).
+  // direction of the wind relative to it (set by computeTorques; kept while the wind is uniform
+  // and unchanged, as it then depends only on the rest plant).
   struct alignas(64) SwayNode {
     Quat restOrientation;  // normalised
     Vec3 offset;           // rest position minus the parent's (a root: its rest position)
     int32_t parent;        // internal index (see order_)
-    Vec3 axis;             // unit b × w, the sway axis
-    float steady;          // min(θ*, maxSwayAngle) before the ease; 0: does not sway
-    float sinToWind;       // |b̂ × ŵ|
+    Vec3 axis;             // unit b × w: turning about it is turning toward the wind
+    Vec3 target;           // θ* = τ / k, the rotation the torque of this frame balances
+    float sinToWind;       // |b̂ × ŵ|; 0: no wind across the node (or held)
     float cosToWind;       // b̂ · ŵ
-    uint32_t chain;        // index into the chains' period and phase
+  };
+  // The exact one-frame solution of eq. 1 for a node: with y = θ − θ*,
+  // (y, θ') ← (a·y + b·θ', c·y + d·θ').
+  struct Step {
+    float a, b, c, d;
   };
   // Where composing has got to: node i's posed position and the angle turned from the root.
   struct Pose {
@@ -132,7 +164,10 @@ class WindMotion {
   };
 
   void computeTorques(float t, const env::WindField& wind);
-  void compose(float t, plant::PlantModel& posed);
+  void integrate(float dt);
+  void prepareSwayLoop(const env::WindField& wind);
+  void evaluateSwayLoop(float t);
+  void compose(plant::PlantModel& posed);
 
   plant::PlantModel rest_;
   plant::GrowthFlowSpecies species_;
@@ -147,6 +182,9 @@ class WindMotion {
   std::vector<SwayNode> nodes_;
   // Per node, from the rest pose, for the torques.
   std::vector<float> stiffness_;   // k (N·m/rad)
+  std::vector<float> inertia_;     // I (kg·m²), within the period limits
+  std::vector<float> damping_;     // c (N·m·s/rad)
+  std::vector<uint8_t> held_;      // held by a support: never sways
   std::vector<Vec3> centre_;       // centre of gravity of the segment (world, rest)
   // The drag's inputs for nodes 4b … 4b + 3, lane l for node 4b + l: b̂, the lever from the
   // node to the centre of gravity, the projected areas of the segment (2 r l) and of its
@@ -160,18 +198,23 @@ class WindMotion {
   // Per node, per step (torques only when the wind is not uniform or changed).
   std::vector<Vec3> force_;        // F_w + T_r
   std::vector<Vec3> moment_;       // moment of F_w + T_r about the node
+  std::vector<Vec3> torque_;       // moment_ less its twist about b (0 for held nodes)
   std::vector<float> speed_;       // the wind speed at the node's centre of gravity
   env::GustSampler gusts_;         // the wind's gusts at centre_ (non-uniform wind, not looped)
   bool uniformCached_ = false;     // nodes_' sway and speed_ are those of a uniform `uniformWind_`
   Vec3 uniformWind_ = Vec3::Zero();
+  // The sway's state: rotation vector and angular velocity per node, and the one-frame solution
+  // for frames of length stepDt_.
+  std::vector<Vec3> theta_, omega_;
+  std::vector<Step> step_;
+  float stepDt_ = -1.0f;
+  // A loop's periodic sway: per node the mean and, per harmonic h = 1 … kLoopHarmonics, the
+  // cosine and sine coefficients of θ (node k's at k · (1 + 2 kLoopHarmonics)).
+  std::vector<Vec3> loopSway_;
+  bool swayLoopReady_ = false;
   std::vector<float> angle_;
   std::vector<Quat> Q_;
   std::vector<Pose> pose_;
-  // Chains (a branch start and the nodes up to the next one) share period and phase: the ease
-  // of eq. 1's sinusoid is computed once per chain.
-  std::vector<float> chainPeriod_;    // per chain (s)
-  std::vector<float> chainPhase_;     // rad
-  std::vector<float> ease_;           // per chain, per step
   // The tree split for parallel passes over parents and children: subtrees of at most a few
   // thousand nodes (tasks, their nodes in index order) hang below a top part. Every node's
   // arithmetic, sums over children included, happens in the same order as a sequential pass,
