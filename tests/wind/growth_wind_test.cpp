@@ -145,6 +145,36 @@ TEST(GrowthFlowClimb, WindAboveMaxGivesShorterThickerSmallerLeavedPlantsTurnedDo
   EXPECT_GT(double(windy.radius[ws[9]]) / double(calm.radius[cs[9]]), 1.04);
 }
 
+TEST(GrowthFlowClimb, MatureSegmentsKeepTheirLengthAndRadiusWhileTheWindGoesOn) {
+  // A climbing ivy (no pipe-model thickening) at 40 and at 120 steps in a storm along its
+  // wall: every segment grown by step 40 has, 80 steps of wind later, the length and radius it
+  // grew with, bit for bit, and its leaves their size (the models' own plants, before the
+  // stems are kept off the wall).
+  auto grow = [](int steps) {
+    std::string json = std::string(R"({"tendril": 1, "seed": 4, "steps": )") + std::to_string(steps) +
+                       R"(, "environment": {"obstacles": [
+          {"name": "ground", "type": "plane", "size": [20, 20]},
+          {"name": "wall", "type": "wall", "size": [12, 6, 0.2]}],
+        "lights": [{"type": "directional", "direction": [0, -1, -0.4]}],
+        "wind": {"mode": "gusty", "velocity": [18, 0, 0]}},
+      "plants": [{"name": "ivy", "position": [0, 0, 0.15],
+                  "species": {"base": "japanese-ivy", "pipe_model": false}}]})";
+    session::Session session(scene::parseScene(parseJson(json, "test scene"), "test scene", test::sourceDir()));
+    session.run(uint32_t(steps));
+    return session.systems().at(0)->snapshots().at(0);
+  };
+  const plant::PlantModel before = grow(40), after = grow(120);
+  ASSERT_GT(before.nodeCount(), 100u);
+  ASSERT_GT(after.nodeCount(), before.nodeCount());
+  for (size_t i = 0; i < before.nodeCount(); ++i) {
+    ASSERT_EQ(after.length[i], before.length[i]) << "node " << i;
+    ASSERT_EQ(after.radius[i], before.radius[i]) << "node " << i;
+    ASSERT_EQ(after.position[i], before.position[i]) << "node " << i;
+  }
+  ASSERT_GE(after.leafCount(), before.leafCount());
+  for (size_t j = 0; j < before.leafCount(); ++j) ASSERT_EQ(after.leafSize[j], before.leafSize[j]) << "leaf " << j;
+}
+
 TEST(GrowthFlowClimb, WindBelowMinChangesNothing) {
   const int steps = 300;
   uint64_t calm = plant::contentHash(growClimb(R"({"velocity": [0, 0, 0]})", steps));

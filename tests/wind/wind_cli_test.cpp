@@ -77,18 +77,27 @@ TEST(WindCli, TheReadmesWindExampleMovesTheClingingIvysLeavesAndGrowsItInAClip) 
     }
     EXPECT_EQ(weights, 2) << "both ivy plants' leaves move";
   }
-  // The growth clip: joints that start at scale 0 and end at 1.
+  // The growth clip: joints that start at scale 0 and end at 1, and leaves that move while
+  // the ivy grows.
   {
     tinygltf::Model m = loadGlb(dir / "out" / "plant-growth.glb");
     ASSERT_EQ(m.animations.size(), 1u);
-    int growing = 0;
+    int growing = 0, weights = 0;
     for (const tinygltf::AnimationChannel& c : m.animations[0].channels) {
+      if (c.target_path == "weights") {
+        const std::vector<float> w = floatsOf(m, m.animations[0].samplers[size_t(c.sampler)].output);
+        const size_t targets = m.meshes[size_t(m.nodes[size_t(c.target_node)].mesh)].weights.size();
+        ASSERT_GT(targets, 0u);
+        const size_t frames = w.size() / targets;
+        weights += !std::equal(w.begin(), w.begin() + long(targets), w.begin() + long((frames / 3) * targets));
+      }
       if (c.target_path != "scale") continue;
       const std::vector<float> s = floatsOf(m, m.animations[0].samplers[size_t(c.sampler)].output);
       growing += s.front() < 1.0f;
       EXPECT_EQ(s.back(), 1.0f);
     }
     EXPECT_GT(growing, 20);
+    EXPECT_EQ(weights, 2) << "both ivy plants' leaves move as they grow";
   }
 }
 
