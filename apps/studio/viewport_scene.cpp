@@ -20,41 +20,9 @@ render::NodeRange subtree(const plant::PlantModel& m, uint32_t node) {
   return {node, end - node};
 }
 
-// Whether `now` is the plant `rest` was: same nodes where they were, same leaves.
-bool samePlant(const plant::PlantModel& rest, const plant::PlantModel& now) {
-  return rest.nodeCount() == now.nodeCount() && rest.leafCount() == now.leafCount() && rest.position == now.position &&
-         rest.orientation == now.orientation && rest.radius == now.radius && rest.length == now.length &&
-         rest.leafRotation == now.leafRotation && rest.leafSize == now.leafSize;
-}
-
 }  // namespace
 
-void ViewportScene::sway(const session::Session& session, float t, float dt) {
-  const env::WindField& wind = session.environment().windField();
-  if (wind.settings().calm()) {
-    motions_.clear();
-    return;
-  }
-  const std::vector<plant::GrowthFlowSpecies> species = session.growthFlow();
-  const bool air = wind.settings().mode == env::WindMode::Sph;
-  motions_.resize(plants_.size());
-  posed_.resize(plants_.size());
-  for (size_t p = 0; p < plants_.size(); ++p) {
-    if ((air && session.system(p).airCoupling()) || plants_[p].nodeCount() == 0) {
-      motions_[p].reset();
-      continue;
-    }
-    if (!motions_[p]) {
-      wind::MotionSettings settings;
-      settings.seed = session.scene().seed + p;
-      motions_[p] = std::make_unique<wind::WindMotion>(plants_[p], species[p], settings);
-    } else if (!samePlant(motions_[p]->rest(), plants_[p])) {
-      motions_[p]->setRest(plants_[p]);
-    }
-    motions_[p]->step(t, dt, wind, posed_[p]);
-    plants_[p] = posed_[p];
-  }
-}
+void ViewportScene::sway(const session::Session& session, float t, float dt) { sway_.pose(session, plants_, t, dt); }
 
 void ViewportScene::setStress(uint32_t plant, std::vector<float> stress) {
   if (stress_.size() <= plant) stress_.resize(plant + 1);

@@ -6,8 +6,8 @@
 #pragma once
 
 #include "tendril/render/render_scene.h"
+#include "tendril/session/plant_sway.h"
 #include "tendril/session/session.h"
-#include "tendril/wind/motion.h"
 
 #include <cstdint>
 #include <memory>
@@ -33,14 +33,12 @@ class ViewportScene {
   // Per-node stress in [0, 1] for a plant (empty = bark colours); applyStress hands the
   // current values to the scene's plant views.
   void setStress(uint32_t plant, std::vector<float> stress);
-  // Growth-Flow motion (wind/motion.h) of the plants as the last update() took them, at time t
-  // (s) with frame length dt: branches sway and leaves move in the scene's wind while the plants
-  // grow and are edited. A plant's motion is kept from frame to frame and told when the plant
-  // changed (WindMotion::setRest), so growing does not restart its sway. Plants the simulated
-  // air moves itself (models::AirCoupling, wind mode sph) are left as they are.
+  // Growth-Flow motion (session/plant_sway.h) of the plants as the last update() took them, at
+  // time t (s) with frame length dt: branches sway and leaves move in the scene's wind while
+  // the plants grow and are edited.
   void sway(const session::Session& session, float t, float dt);
   // Forgets every plant's motion (sway turned off, or another session opened).
-  void stopSway() { motions_.clear(); }
+  void stopSway() { sway_.clear(); }
   void applyStress();
 
   const render::RenderScene& scene() const { return scene_; }
@@ -51,8 +49,7 @@ class ViewportScene {
 
  private:
   std::vector<plant::PlantModel> plants_;
-  std::vector<std::unique_ptr<wind::WindMotion>> motions_;  // per plant, while it sways
-  std::vector<plant::PlantModel> posed_;
+  session::PlantSway sway_;
   std::vector<std::vector<float>> stress_;
   std::vector<TriangleMesh> meshes_;
   std::vector<uint64_t> meshKeys_;
