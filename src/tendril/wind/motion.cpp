@@ -124,8 +124,8 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
   force_.resize(n);
   moment_.resize(n);
   torque_.assign(n, Vec3::Zero());
-  theta_.assign(n, Vec3::Zero());
-  omega_.assign(n, Vec3::Zero());
+  sway_.assign((n + 3) / 4, SwayBlock{});
+  swayAxisAngle_.assign(n, AxisAngle{Vec3::UnitX(), 0.0f});
   speed_.resize(n);
   angle_.assign(n, 0.0f);
   Q_.assign(n, Quat::Identity());
@@ -188,7 +188,6 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
     r.parent = p;
     r.offset = p < 0 ? rest_.position[i] : Vec3(rest_.position[i] - rest_.position[size_t(p)]);
     r.axis = Vec3::UnitX();
-    r.target = Vec3::Zero();
     r.sinToWind = 0.0f;
     r.cosToWind = 1.0f;
   }
@@ -273,14 +272,32 @@ void WindMotion::setRest(const plant::PlantModel& rest) {
   const uint32_t frame = frame_;
   std::vector<plant::LeafMotionState> leaves = std::move(leaves_);
   // The sway state by the plant's node index.
-  const size_t before = theta_.size();
+  const size_t before = nodes_.size();
   std::vector<Vec3> theta(before), omega(before);
-  for (size_t i = 0; i < before; ++i) theta[i] = theta_[internal_[i]], omega[i] = omega_[internal_[i]];
+  for (size_t i = 0; i < before; ++i) theta[i] = swayVector(i), omega[i] = swayVelocity(i);
   *this = WindMotion(rest, species_, settings_);
   frame_ = frame;
   for (size_t j = 0; j < leaves.size() && j < leaves_.size(); ++j) leaves_[j] = leaves[j];
-  for (size_t i = 0; i < before && i < theta_.size(); ++i)
-    if (!held_[internal_[i]]) theta_[internal_[i]] = theta[i], omega_[internal_[i]] = omega[i];
+  for (size_t i = 0; i < before && i < nodes_.size(); ++i) {
+    const size_t k = internal_[i];
+    if (held_[k]) continue;
+    SwayBlock& B = sway_[k / 4];
+    const size_t l = k % 4;
+    B.theta.x[l] = theta[i].x(), B.theta.y[l] = theta[i].y(), B.theta.z[l] = theta[i].z();
+    B.omega.x[l] = omega[i].x(), B.omega.y[l] = omega[i].y(), B.omega.z[l] = omega[i].z();
+  }
+}
+
+Vec3 WindMotion::swayVector(size_t i) const {
+  const size_t k = internal_[i];
+  const SwayBlock& B = sway_[k / 4];
+  return Vec3(B.theta.x[k % 4], B.theta.y[k % 4], B.theta.z[k % 4]);
+}
+
+Vec3 WindMotion::swayVelocity(size_t i) const {
+  const size_t k = internal_[i];
+  const SwayBlock& B = sway_[k / 4];
+  return Vec3(B.omega.x[k % 4], B.omega.y[k % 4], B.omega.z[k % 4]);
 }
 
 std::vector<Vec3> WindMotion::nodeTranslation() const {
@@ -418,10 +435,11 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
   // The torque τ, the moment less its twist about b (which turns a segment about itself, not
   // its subtree), and the rotation θ* = τ / k it balances against the segment's spring.
   parallelFor(size_t(0), n, [&](size_t i) {
-    SwayNode& r = nodes_[i];
+    SwayBlock& S = sway_[i / 4];
+    const size_t lane = i % 4;
     if (held_[i]) {
       torque_[i] = Vec3::Zero();
-      r.target = Vec3::Zero();
+      S.target.x[lane] = S.target.y[lane] = S.target.z[lane] = 0.0f;
       return;
     }
     const DragBlock& B = dragBlocks_[i / 4];
@@ -429,47 +447,33 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
     const Vec3 d(B.direction.x[l], B.direction.y[l], B.direction.z[l]);
     const Vec3 tau = moment_[i] - moment_[i].dot(d) * d;
     torque_[i] = tau;
-    r.target = tau * (1.0f / stiffness_[i]);
+    const Vec3 target = tau * (1.0f / stiffness_[i]);
+    S.target.x[lane] = target.x(), S.target.y[lane] = target.y(), S.target.z[lane] = target.z();
   }, 1024);
   uniformCached_ = uniform;
   uniformWind_ = ws.velocity;
 }
 
-void WindMotion::integrate(float dt) {
+void WindMotion::prepareSteps(float dt) {
+  if (dt == stepDt_) return;
+  // The damped oscillator over dt in closed form (ζ < 1): with ω_n = √(k / I), σ = ζ ω_n,
+  // ω_d = ω_n √(1 − ζ²), e = exp(−σ dt), C = cos ω_d dt, S = sin ω_d dt:
+  //   y(dt)  = e (y (C + σ/ω_d S) + y' S / ω_d)
+  //   y'(dt) = e (y' (C − σ/ω_d S) − y ω_n²/ω_d S).
   const size_t n = nodes_.size();
-  if (!(dt > 0.0f)) return;
-  if (dt != stepDt_) {
-    // The damped oscillator over dt in closed form (ζ < 1): with ω_n = √(k / I), σ = ζ ω_n,
-    // ω_d = ω_n √(1 − ζ²), e = exp(−σ dt), C = cos ω_d dt, S = sin ω_d dt:
-    //   y(dt)  = e (y (C + σ/ω_d S) + y' S / ω_d)
-    //   y'(dt) = e (y' (C − σ/ω_d S) − y ω_n²/ω_d S).
-    step_.resize(n);
-    parallelFor(size_t(0), n, [&](size_t i) {
-      const double k = std::max(double(stiffness_[i]), 1e-12), I = inertia_[i];
-      const double wn = std::sqrt(k / I), sigma = double(damping_[i]) / (2.0 * I);
-      const double wd = std::sqrt(std::max(wn * wn - sigma * sigma, 1e-12 * wn * wn));
-      const double e = std::exp(-sigma * double(dt)), C = std::cos(wd * double(dt)), S = std::sin(wd * double(dt));
-      step_[i] = Step{float(e * (C + sigma / wd * S)), float(e * S / wd), float(-e * wn * wn / wd * S),
-                      float(e * (C - sigma / wd * S))};
-    }, 1024);
-    stepDt_ = dt;
-  }
-  const float limit = species_.maxSwayAngle;
   parallelFor(size_t(0), n, [&](size_t i) {
-    const Step& k = step_[i];
-    const Vec3& target = nodes_[i].target;
-    const Vec3 y = theta_[i] - target, v = omega_[i];
-    Vec3 theta = target + k.a * y + k.b * v;
-    Vec3 omega = k.c * y + k.d * v;
-    // The species' limit is a stop: a node that reaches it rests there.
-    const float a2 = theta.squaredNorm();
-    if (a2 > limit * limit) {
-      theta *= limit / std::sqrt(a2);
-      omega = Vec3::Zero();
-    }
-    theta_[i] = theta;
-    omega_[i] = omega;
+    const double k = std::max(double(stiffness_[i]), 1e-12), I = inertia_[i];
+    const double wn = std::sqrt(k / I), sigma = double(damping_[i]) / (2.0 * I);
+    const double wd = std::sqrt(std::max(wn * wn - sigma * sigma, 1e-12 * wn * wn));
+    const double e = std::exp(-sigma * double(dt)), C = std::cos(wd * double(dt)), S = std::sin(wd * double(dt));
+    SwayBlock& B = sway_[i / 4];
+    const size_t l = i % 4;
+    B.a[l] = float(e * (C + sigma / wd * S));
+    B.b[l] = float(e * S / wd);
+    B.c[l] = float(-e * wn * wn / wd * S);
+    B.d[l] = float(e * (C - sigma / wd * S));
   }, 1024);
+  stepDt_ = dt;
 }
 
 void WindMotion::prepareSwayLoop(const env::WindField& wind) {
@@ -517,24 +521,56 @@ void WindMotion::evaluateSwayLoop(float t) {
     const Vec3* c = &loopSway_[i * kCoefficients];
     Vec3 theta = c[0];
     for (int h = 1; h <= H; ++h) theta += C[h] * c[2 * h - 1] + S[h] * c[2 * h];
-    theta_[i] = theta;
+    SwayBlock& B = sway_[i / 4];
+    const size_t l = i % 4;
+    B.theta.x[l] = theta.x(), B.theta.y[l] = theta.y(), B.theta.z[l] = theta.z();
   }, 1024);
+}
+
+void WindMotion::advance(bool integrate) {
+  // Four nodes at a time: eq. 1 over the frame, the species' limit as a stop (a node that
+  // reaches it rests there), then the axis and angle composing turns the node by.
+  using namespace lanes;
+  const float limit = species_.maxSwayAngle;
+  const F4 limit4 = splat(limit), limit2 = splat(limit * limit), zero = splat(0.0f), one = splat(1.0f);
+  const size_t n = nodes_.size();
+  parallelFor(size_t(0), sway_.size(), [&](size_t b) {
+    SwayBlock& B = sway_[b];
+    if (integrate) {
+      const V3 y = B.theta - B.target, v = B.omega;
+      V3 th = B.target + (B.a * y + B.b * v);
+      V3 om = B.c * y + B.d * v;
+      const F4 a2 = dot(th, th);
+      const M4 over = a2 > limit2;
+      const F4 scale = over ? limit4 / sqrt4(over ? a2 : one) : one;
+      th = scale * th;
+      om = select(over, V3{zero, zero, zero}, om);
+      B.theta = th;
+      B.omega = om;
+    }
+    const F4 a = sqrt4(dot(B.theta, B.theta));
+    const M4 moves = a > zero;
+    const F4 inv = one / (moves ? a : one);
+    const V3 axis = select(moves, inv * B.theta, V3{one, zero, zero});
+    const F4 angle = a < limit4 ? a : limit4;
+    for (size_t l = 0; l < 4 && 4 * b + l < n; ++l)
+      swayAxisAngle_[4 * b + l] = AxisAngle{Vec3(axis.x[l], axis.y[l], axis.z[l]), angle[l]};
+  }, 256);
 }
 
 void WindMotion::compose(plant::PlantModel& posed) {
   // Parents first: node i's subtree turns about p_i on top of its parent's motion by its sway
-  // θ, at most the species' limit, and never past the wind: the angles toward the wind along
-  // its path are capped by its rest angle to the wind.
+  // (swayAxisAngle_), and never past the wind: the angles toward the wind along its path are
+  // capped by its rest angle to the wind.
   // Plain pointers: Eigen's stores may alias anything, so members would be reloaded per node.
   const SwayNode* const nodes = nodes_.data();
-  const Vec3* const theta = theta_.data();
+  const AxisAngle* const sway = swayAxisAngle_.data();
   Quat* const rotation = Q_.data();
   Pose* const pose = pose_.data();
   float* const angle = angle_.data();
   Vec3* const position = posed.position.data();
   Quat* const orientation = posed.orientation.data();
   const uint32_t* const order = order_.data();
-  const float limit = species_.maxSwayAngle;
   auto composeNode = [=](size_t i) {
     const SwayNode& r = nodes[i];
     Quat Qp = Quat::Identity();
@@ -548,21 +584,19 @@ void WindMotion::compose(plant::PlantModel& posed) {
       // from the parent keeps round-off small far from the origin.
       p = pose[parent].position + Qp * r.offset;
     }
-    Vec3 th = theta[i];
-    float a = th.norm();
-    if (a > limit) th *= limit / a, a = limit;
+    const AxisAngle& s = sway[i];
+    float a = s.angle;
     // How far it turns toward the wind; §3.1.1's angle to the wind, acos(b·w / bw), is at least
     // its sine: only a path turned further needs it exactly.
-    float toward = r.sinToWind > 0.0f ? th.dot(r.axis) : 0.0f;
+    float toward = a > 0.0f && r.sinToWind > 0.0f ? a * s.axis.dot(r.axis) : 0.0f;
     if (toward > 0.0f && before + toward > r.sinToWind) {
       const float room = std::max(0.0f, atan2Upper(r.sinToWind, r.cosToWind) - before);
       if (toward > room) {
-        th *= room / toward;
         a *= room / toward;
         toward = room;
       }
     }
-    const Quat Q = a > 0.0f ? renormalized(Qp * swayRotation(a, th * (1.0f / a))) : Qp;
+    const Quat Q = a > 0.0f ? renormalized(Qp * swayRotation(a, s.axis)) : Qp;
     angle[i] = a;
     rotation[i] = Q;
     pose[i] = Pose{p, before + toward};
@@ -666,9 +700,11 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
     if (!swayLoopReady_) prepareSwayLoop(wind);
     evaluateSwayLoop(t);
     computeTorques(t, wind);  // the wind's direction at the nodes, for the limits
+    advance(false);
   } else {
     computeTorques(t, wind);
-    integrate(dt);
+    if (dt > 0.0f) prepareSteps(dt);
+    advance(dt > 0.0f);
   }
   compose(posed);
 

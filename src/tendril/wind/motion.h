@@ -119,8 +119,8 @@ class WindMotion {
   float swayAngle(size_t i) const { return angle_[internal_[i]]; }
   // Node i's sway state: its rotation vector θ and angular velocity θ' (before the limits),
   // and the coefficients of its eq. 1: I (kg m², after the period limits), c, k.
-  Vec3 swayVector(size_t i) const { return theta_[internal_[i]]; }
-  Vec3 swayVelocity(size_t i) const { return omega_[internal_[i]]; }
+  Vec3 swayVector(size_t i) const;
+  Vec3 swayVelocity(size_t i) const;
   float inertia(size_t i) const { return inertia_[internal_[i]]; }
   float damping(size_t i) const { return damping_[internal_[i]]; }
   float stiffness(size_t i) const { return stiffness_[internal_[i]]; }
@@ -148,14 +148,20 @@ class WindMotion {
     Vec3 offset;           // rest position minus the parent's (a root: its rest position)
     int32_t parent;        // internal index (see order_)
     Vec3 axis;             // unit b × w: turning about it is turning toward the wind
-    Vec3 target;           // θ* = τ / k, the rotation the torque of this frame balances
     float sinToWind;       // |b̂ × ŵ|; 0: no wind across the node (or held)
     float cosToWind;       // b̂ · ŵ
   };
-  // The exact one-frame solution of eq. 1 for a node: with y = θ − θ*,
-  // (y, θ') ← (a·y + b·θ', c·y + d·θ').
-  struct Step {
-    float a, b, c, d;
+  // Eq. 1's state for nodes 4b … 4b + 3, lane l for node 4b + l: the rotation vector θ, its
+  // rate θ', the θ* = τ / k this frame's torque balances, and the exact one-frame solution:
+  // with y = θ − θ*, (y, θ') ← (a·y + b·θ', c·y + d·θ').
+  struct SwayBlock {
+    lanes::V3 theta, omega, target;
+    lanes::F4 a, b, c, d;
+  };
+  // What composing reads of the sway: its unit axis and angle (at most the species' limit).
+  struct AxisAngle {
+    Vec3 axis;
+    float angle;
   };
   // Where composing has got to: node i's posed position and the angle turned from the root.
   struct Pose {
@@ -164,9 +170,11 @@ class WindMotion {
   };
 
   void computeTorques(float t, const env::WindField& wind);
-  void integrate(float dt);
+  void prepareSteps(float dt);
   void prepareSwayLoop(const env::WindField& wind);
   void evaluateSwayLoop(float t);
+  // Advances eq. 1 one frame (with `integrate`), then sets swayAxisAngle_ from θ.
+  void advance(bool integrate);
   void compose(plant::PlantModel& posed);
 
   plant::PlantModel rest_;
@@ -203,10 +211,10 @@ class WindMotion {
   env::GustSampler gusts_;         // the wind's gusts at centre_ (non-uniform wind, not looped)
   bool uniformCached_ = false;     // nodes_' sway and speed_ are those of a uniform `uniformWind_`
   Vec3 uniformWind_ = Vec3::Zero();
-  // The sway's state: rotation vector and angular velocity per node, and the one-frame solution
-  // for frames of length stepDt_.
-  std::vector<Vec3> theta_, omega_;
-  std::vector<Step> step_;
+  // The sway's state, four nodes to a block, and the one-frame solution for frames of length
+  // stepDt_.
+  std::vector<SwayBlock> sway_;
+  std::vector<AxisAngle> swayAxisAngle_;  // per node
   float stepDt_ = -1.0f;
   // A loop's periodic sway: per node the mean and, per harmonic h = 1 … kLoopHarmonics, the
   // cosine and sine coefficients of θ (node k's at k · (1 + 2 kLoopHarmonics)).
