@@ -188,6 +188,25 @@ inline float bounceAngle(float angle, int8_t& sign, float w, float rate, float d
   return std::clamp(next, -limit, limit);
 }
 
+// §3.2.1's rule for which motion the wind makes of a leaf: a blade facing the wind bends, one
+// oblique to it twists, one parallel to it vibrates. Algorithm 2 draws one motion per frame; we
+// draw it with these chances, from c = |n̂ · ŵ| (n̂ the blade's normal): bend c², twist
+// 2 c (1 − c), vibrate (1 − c)² — only bending when facing (c = 1), only vibrating when parallel
+// (c = 0), twisting most at 45°, and Algorithm 2's 1/3 each nowhere in particular. `chance`
+// gets the three in the order bend, twist, vibrate.
+inline void leafMotionChances(float facing, float chance[3]) {
+  const float c = std::clamp(facing, 0.0f, 1.0f);
+  chance[0] = c * c;
+  chance[1] = 2.0f * c * (1.0f - c);
+  chance[2] = (1.0f - c) * (1.0f - c);
+}
+// The motion type for a uniform draw u ∈ [0, 1) with those chances.
+inline int leafMotionType(float facing, float u) {
+  float chance[3];
+  leafMotionChances(facing, chance);
+  return u < chance[0] ? 0 : u < chance[0] + chance[1] ? 1 : 2;
+}
+
 // A leaf's motion state (Algorithm 2): the four angles and their directions.
 struct LeafMotionState {
   float petioleBend = 0, bladeBend = 0, twist = 0, vibrate = 0;  // θ, β, ψ, φ (rad)

@@ -6,6 +6,7 @@
 #include "tendril/core/match_lanes.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstring>
@@ -127,6 +128,7 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
   sway_.assign((n + 3) / 4, SwayBlock{});
   swayAxisAngle_.assign(n, AxisAngle{Vec3::UnitX(), 0.0f});
   speed_.resize(n);
+  windAt_.assign(n, Vec3::Zero());
   angle_.assign(n, 0.0f);
   Q_.assign(n, Quat::Identity());
   pose_.resize(n);
@@ -195,6 +197,8 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
   leafKey_.resize(m);
   leafRest_.resize(m);
   for (size_t j = 0; j < m; ++j) leafRest_[j] = rest_.leafRotation[j].normalized();
+  leafNormal_.resize(m);
+  for (size_t j = 0; j < m; ++j) leafNormal_[j] = (rest_.leafWorldRotation(j) * Vec3::UnitZ()).normalized();
   for (size_t j = 0; j < m; ++j) leafKey_[j] = Rng(RandomKey{settings_.seed, 0, j, 0, kLeafPurpose}).key();
   slot_.assign(m, 0);
 
@@ -247,6 +251,7 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
   permute(damping_);
   permute(held_);
   permute(centre_);
+  permute(windAt_);
   permute(pose_);
   for (uint32_t& i : mergeNodes_) i = internal_[i];
   topCount_ = topNodes.size();
@@ -361,6 +366,7 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
     force_[i] = half * (stemA * wPerp.norm() * wPerp + leafA * speed * w);
     moment_[i] = lever.cross(force_[i]);
     speed_[i] = speed;
+    windAt_[i] = w;
     SwayNode& r = nodes_[i];
     r.axis = Vec3::UnitX();
     r.sinToWind = 0.0f;  // below the threshold: does not sway
@@ -409,6 +415,7 @@ void WindMotion::computeTorques(float t, const env::WindField& wind) {
       force_[i + size_t(l)] = Vec3(force.x[l], force.y[l], force.z[l]);
       moment_[i + size_t(l)] = Vec3(moment.x[l], moment.y[l], moment.z[l]);
       speed_[i + size_t(l)] = speed[l];
+      windAt_[i + size_t(l)] = Vec3(w.x[l], w.y[l], w.z[l]);
       SwayNode& r = nodes_[i + size_t(l)];
       r.axis = Vec3(axis.x[l], axis.y[l], axis.z[l]);
       r.sinToWind = sinToWind[l];
@@ -625,7 +632,7 @@ const LeafLoop& WindMotion::prepareLeafLoop(const env::WindField& wind) {
                            species_.vibrateLimit};
   // The steady wind at each leaf's node (at its segment's centre of gravity, as for the sway).
   const env::WindSettings& ws = wind.settings();
-  std::vector<float> speed(m, 0.0f);
+  std::vector<float> speed(m, 0.0f), facing(m, 0.0f);
   for (size_t j = 0; j < m; ++j) {
     const Vec3& c = centre_[leafNode_[j]];
     Vec3 w;
@@ -636,23 +643,30 @@ const LeafLoop& WindMotion::prepareLeafLoop(const env::WindField& wind) {
       for (const env::WindEmitter& e : ws.emitters) w += env::WindField::jet(e, c);
     }
     speed[j] = w.norm();
+    facing[j] = speed[j] > 0.0f ? std::fabs(leafNormal_[j].dot(w)) / speed[j] : 0.0f;
   }
-  // Mean angular speed of each motion: w · rate · E[l_s] / 3.
+  // Mean angular speed of each motion: w · rate · E[l_s] · the leaf's chance of the motion.
   const float meanGust = 0.5f * (1.0f + settings_.gustMin);
   const float L = settings_.loopSeconds;
-  std::vector<float> live;
+  std::vector<std::array<float, 3>> meanSpeed(m, std::array<float, 3>{0.0f, 0.0f, 0.0f});
   for (size_t j = 0; j < m; ++j) {
     loop.leaves[j].torn = plant::leafDetaches(speed[j], species_);
-    if (!loop.leaves[j].torn && speed[j] > 0.0f) live.push_back(speed[j]);
-  }
-  float median = 0.0f;
-  if (!live.empty()) {
-    std::nth_element(live.begin(), live.begin() + live.size() / 2, live.end());
-    median = live[live.size() / 2];
+    if (loop.leaves[j].torn) continue;
+    float chance[3];
+    plant::leafMotionChances(facing[j], chance);
+    for (int k = 0; k < 3; ++k) meanSpeed[j][size_t(k)] = speed[j] * rates[k] * meanGust * chance[k];
   }
   for (int k = 0; k < 3; ++k) {
-    // A wave bouncing between ±limit at speed v has period 4 · limit / v.
-    const float v = median * rates[k] * meanGust / 3.0f;
+    // The median leaf that makes this motion at all; a wave bouncing between ±limit at speed v
+    // has period 4 · limit / v.
+    std::vector<float> live;
+    for (size_t j = 0; j < m; ++j)
+      if (meanSpeed[j][size_t(k)] > 0.0f) live.push_back(meanSpeed[j][size_t(k)]);
+    float v = 0.0f;
+    if (!live.empty()) {
+      std::nth_element(live.begin(), live.begin() + live.size() / 2, live.end());
+      v = live[live.size() / 2];
+    }
     const float period = v > 0.0f && limits[k] > 0.0f ? 4.0f * limits[k] / v : L;
     loop.cycles[k] = int(std::clamp(std::round(L / period), 1.0f, 1000.0f));
   }
@@ -662,7 +676,7 @@ const LeafLoop& WindMotion::prepareLeafLoop(const env::WindField& wind) {
     for (int k = 0; k < 3; ++k) {
       f.phase[k] = uint8_t(rng.below(LeafLoop::kPhases));
       if (f.torn) continue;
-      const float v = speed[j] * rates[k] * meanGust / 3.0f;
+      const float v = meanSpeed[j][size_t(k)];
       const float quarter = 0.25f * L / float(loop.cycles[k]);
       f.amplitude[k] = std::min(limits[k], v * quarter);
     }
@@ -724,6 +738,8 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   const uint32_t* const leafNode = leafNode_.data();
   const Quat* const restRotation = leafRest_.data();
   const float* const speed = speed_.data();
+  const Vec3* const windAt = windAt_.data();
+  const Vec3* const normal = leafNormal_.data();
   const uint32_t* const slot = k == m ? nullptr : slot_.data();  // none torn off: leaf j is posed leaf j
   Quat* const rotation = posed.leafRotation.data();
   Vec3* const motion = posed.leafMotion.data();
@@ -739,9 +755,13 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
       L = leafLoop->state(j, t, loopSeconds);
     } else {
       Rng rng(mix64(keys[j] ^ (uint64_t(frame) * 0x9e3779b97f4a7c15ull)));
-      int type = int(rng.below(3));
-      float gust = gustMin + (1.0f - gustMin) * rng.uniform();
-      plant::updateLeafMotion(L, type, speed[size_t(leafNode[j])], gust, dt, species);
+      const size_t node = leafNode[j];
+      const float w = speed[node];
+      // §3.2.1: the blade's angle to the wind decides how it moves.
+      const float facing = w > 0.0f ? std::fabs(normal[j].dot(windAt[node])) / w : 0.0f;
+      const int type = plant::leafMotionType(facing, rng.uniform());
+      const float gust = gustMin + (1.0f - gustMin) * rng.uniform();
+      plant::updateLeafMotion(L, type, w, gust, dt, species);
     }
     if (L.detached) {
       tore.store(true, std::memory_order_relaxed);

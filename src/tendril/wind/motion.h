@@ -30,8 +30,11 @@
 // sampled kLoopSamples times, as a Fourier series of kLoopHarmonics harmonics, each answered by
 // the oscillator's frequency response. So the clip repeats exactly, at any frame rate.
 //
-// Leaves. Each frame every leaf gets one random motion type (1/3 each, §4) and a gust fraction
-// l_s ∈ [gustMin, 1] of the wind at its node; eq. 10–15 move its angles (growth_flow.h). A leaf's posed rotation is
+// Leaves. Each frame every leaf gets one random motion type and a gust fraction l_s ∈
+// [gustMin, 1] of the wind at its node; eq. 10–15 move its angles (growth_flow.h). The type
+// follows §3.2.1's rule (plant::leafMotionChances): a blade facing the wind bends, one oblique
+// to it twists, one parallel to it vibrates, drawn with chances from the angle between the
+// blade's rest normal and the wind at its node (Algorithm 2 draws 1/3 each). A leaf's posed rotation is
 // its rest rotation · R_Y(ψ) · R_X(θ + φ) (twist about the petiole, petiole bend and vibration
 // about the blade's width axis at the petiole); the blade bend β goes to leafMotion.x, where
 // the leaf mesh curls the blade, and leafMotion = (β, ψ, φ). Detached leaves are left out of
@@ -41,8 +44,9 @@
 // loopSeconds > 0 each of a leaf's three motions (the bend — of the petiole or of the blade, as
 // Algorithm 2 picks —, the twist and the vibration) is the triangle wave eq. 10–15 trace when
 // the angle bounces between ±limit at the mean speed Algorithm 2 gives it: w · rate · (1 +
-// gustMin) / 2 (the mean gust fraction l_s) / 3 (one frame in three). Per plant and motion the
-// wave makes a whole number of cycles per loop, the number nearest the median leaf's; a leaf's
+// gustMin) / 2 (the mean gust fraction l_s) · the leaf's chance of that motion (above). Per
+// plant and motion the wave makes a whole number of cycles per loop, the number nearest the
+// median moving leaf's; a leaf's
 // amplitude is what its own speed covers in a quarter period, at most the limit (leaves in
 // calmer air move less), and its phase is one of kLeafPhases quarters, drawn per leaf and
 // motion. w is the steady wind at the leaf's node (the prevailing wind and the emitters, or the
@@ -208,6 +212,7 @@ class WindMotion {
   std::vector<Vec3> moment_;       // moment of F_w + T_r about the node
   std::vector<Vec3> torque_;       // moment_ less its twist about b (0 for held nodes)
   std::vector<float> speed_;       // the wind speed at the node's centre of gravity
+  std::vector<Vec3> windAt_;       // ... and the wind there
   env::GustSampler gusts_;         // the wind's gusts at centre_ (non-uniform wind, not looped)
   bool uniformCached_ = false;     // nodes_' sway and speed_ are those of a uniform `uniformWind_`
   Vec3 uniformWind_ = Vec3::Zero();
@@ -233,6 +238,7 @@ class WindMotion {
   // Per leaf.
   std::vector<plant::LeafMotionState> leaves_;
   std::vector<Quat> leafRest_;     // rest rotation, normalised
+  std::vector<Vec3> leafNormal_;   // the blade's normal at rest (world)
   std::vector<uint32_t> leafNode_; // the (internal) node the leaf hangs on
   std::vector<uint64_t> leafKey_;  // random key of the leaf's motion; each frame mixes in its number
   std::vector<uint32_t> kept_;     // leaves still attached, in order
