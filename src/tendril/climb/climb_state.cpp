@@ -13,7 +13,7 @@ namespace tendril::climb {
 
 namespace {
 
-constexpr uint32_t kClimbTag = 0x4d4c4331;  // "1CLM"
+constexpr uint32_t kClimbTag = 0x4d4c4332;  // "2CLM" (2: tips carry Growth-Flow's length factor)
 
 }  // namespace
 
@@ -68,7 +68,7 @@ void ClimbSystem::loadState(ArchiveReader& in) {
     for (const Tip& t : p->tips)
       if (!near(t.position) || !near(t.dir) || !near(t.normal) || !near(t.shootStart) || !std::isfinite(t.length) ||
           !std::isfinite(t.radius) || !std::isfinite(t.leafSize) || !std::isfinite(t.leafThickness) ||
-          !std::isfinite(t.windAngle) ||
+          !std::isfinite(t.windAngle) || !(t.windLength > 0.0f && t.windLength <= 1.0f) ||
           (t.support && (!near(t.support->point) || !near(t.support->normal) || !near(t.support->away))))
         in.fail("a tip of a saved climbing plant holds a value out of range");
   }
