@@ -205,6 +205,9 @@ TEST(WindOnAWall, LSystemIvy) { expectWindKeepsThePlantOutsideItsWall(Model::LSy
 // Climbing plants stop growing when crowding stops their branching, a near-critical process:
 // the segment count of one plant swings by a factor of two with its seed, so ten seeds (cheap:
 // a few seconds together).
+// Particle ivy fills its max_particles (1500) in every condition; two seeds (the slowest of the
+// three, ~15 s).
+TEST(WindOnAWall, ParticleIvy) { expectWindKeepsThePlantOutsideItsWall(Model::Particles, {1, 2}); }
 TEST(WindOnAWall, ClimbingIvy) { expectWindKeepsThePlantOutsideItsWall(Model::Climb, {1, 2, 3, 4, 5, 6, 7, 8, 9, 10}); }
 
 
