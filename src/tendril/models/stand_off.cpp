@@ -67,12 +67,14 @@ bool bladeBlocked(const env::Environment& env, const Vec3& attach, const Vec3 c[
 }
 
 // Leaves that pass through a surface (a particle plant's blades turned to the light into the
-// wall they grow on, a blade carried along by a stem moved off its support), or whose upper
-// side faces a surface within their reach, are laid parallel
+// wall they grow on, a blade carried along by a stem moved off its support), or that a moved
+// stem carried round to face a surface within their reach, are laid parallel
 // to the surface nearest their attachment, upper side away from it, as climbing plants place
 // them (climb/climb_system.cpp, placeLeaves); where that is not enough they shrink (0.7, 0.45)
 // or, failing that, are dropped. Returns the number of leaves changed or dropped.
-size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env) {
+// Only the leaves of nodes that moved (`movedNode`, empty: none) are checked for facing a
+// surface: a leaf the model placed keeps the side it was grown with.
+size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, const std::vector<uint8_t>& movedNode) {
   const size_t count = p.leafCount();
   std::vector<uint8_t> keep(count, 1), changed(count, 0);
   std::vector<Quat> rotation(count);
@@ -83,11 +85,17 @@ size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env) {
     const Quat world = p.leafWorldRotation(j);
     Vec3 c[4];
     bladeCorners(p, j, attach, world, p.leafSize[j], p.leafPetiole[j], c);
-    const std::optional<env::SurfacePoint> s = env.closestPoint(attach, p.leafPetiole[j] + p.leafSize[j]);
-    // A blade within its own reach of a surface turns its upper side away from it, as clinging
-    // leaves do (a stem moved off its support may have carried one round to face it).
-    const bool facing = s && (world * Vec3::UnitZ()).dot(s->away) < 0.0f;
+    const float reach = p.leafPetiole[j] + p.leafSize[j];
+    std::optional<env::SurfacePoint> s;
+    bool facing = false;
+    if (!movedNode.empty() && movedNode[size_t(p.leafNode[j])]) {
+      // A blade within its own reach of a surface turns its upper side away from it, as
+      // clinging leaves do (a stem moved off its support may have carried one round to face it).
+      s = env.closestPoint(attach, reach);
+      facing = s && (world * Vec3::UnitZ()).dot(s->away) < 0.0f;
+    }
     if (!facing && !bladeBlocked(env, attach, c)) return;
+    if (!s) s = env.closestPoint(attach, reach);
     changed[j] = 1;
     Quat laid = world;
     if (s) {
@@ -194,12 +202,19 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
   for (size_t i = 0; i < n; ++i) spanEnd[i] = next[i] >= 0 ? startPoint[size_t(next[i])] : tipPoint[i];
   // Pushing a span's ends changes its neighbours' bows: up to three rounds, until no span needs
   // a push.
+  // After the first round only spans with a control point pushed in the round before are
+  // looked at again.
   std::vector<Vec3> midPush(n);
+  std::vector<uint8_t> pushedPoint(m, 1);
   for (int round = 0; round < 3; ++round) {
     parallelFor(size_t(0), n, [&](size_t i) {
       midPush[i] = Vec3::Zero();
       if (!(p.length[i] > 0.0f)) return;
       const int32_t q = p.parent[i], c = next[i];
+      if (round > 0 && !pushedPoint[startPoint[i]] && !pushedPoint[spanEnd[i]] &&
+          !(q >= 0 && next[size_t(q)] == int32_t(i) && pushedPoint[startPoint[size_t(q)]]) &&
+          !(c >= 0 && pushedPoint[spanEnd[size_t(c)]]))
+        return;
       const Vec3 a = at(startPoint[i]), b = at(spanEnd[i]);
       const Vec3 chord = b - a;
       const float len = chord.norm();
@@ -229,13 +244,15 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
     // L-system plants); across a gap (particle plants) it ends at the next node's start, and
     // both nodes move whole, so that no node changes its length.
     bool pushed = false;
+    std::fill(pushedPoint.begin(), pushedPoint.end(), 0);
+    auto push = [&](uint32_t k, const Vec3& v) { move[k] += v, pushedPoint[k] = 1; };
     for (size_t i = 0; i < n; ++i) {
       if (midPush[i] == Vec3::Zero()) continue;
-      if (!planted[startPoint[i]]) move[startPoint[i]] += midPush[i];
-      move[tipPoint[i]] += midPush[i];
+      if (!planted[startPoint[i]]) push(startPoint[i], midPush[i]);
+      push(tipPoint[i], midPush[i]);
       if (spanEnd[i] != tipPoint[i]) {
-        move[spanEnd[i]] += midPush[i];
-        move[tipPoint[size_t(next[i])]] += midPush[i];
+        push(spanEnd[i], midPush[i]);
+        push(tipPoint[size_t(next[i])], midPush[i]);
       }
       pushed = true;
     }
@@ -270,7 +287,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
   const std::vector<Quat> oldOrientation = p.orientation;
   size_t moved = 0;
   for (size_t k = 0; k < m; ++k) moved += move[k] != Vec3::Zero();
-  if (moved == 0) return keepLeavesOutside(p, env);
+  if (moved == 0) return keepLeavesOutside(p, env, {});
   for (size_t i = 0; i < n; ++i) {
     const Vec3 a = at(startPoint[i]), b = at(tipPoint[i]);
     p.position[i] = a;
@@ -293,7 +310,9 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
     p.leafOffset[j] = inverse * (world - p.position[i]);
     p.leafRotation[j] = (inverse * worldRotation).normalized();
   }
-  return moved + keepLeavesOutside(p, env);
+  std::vector<uint8_t> movedNode(n);
+  for (size_t i = 0; i < n; ++i) movedNode[i] = move[startPoint[i]] != Vec3::Zero() || move[tipPoint[i]] != Vec3::Zero();
+  return moved + keepLeavesOutside(p, env, movedNode);
 }
 
 }  // namespace tendril::models
