@@ -3,8 +3,10 @@
 // (render/plant_instances.h), for about 5k and 25k particles. The scenes are
 // bench/scenes/interactive-*.json (fast-growing ivies, so the setup takes a few hundred
 // steps). Results and commands: bench/README.md.
+#include "tendril/core/parallel.h"
 #include "tendril/core/timer.h"
 #include "tendril/mesh/leaf_mesh.h"
+#include "tendril/models/stand_off.h"
 #include "support/particle_session.h"
 #include "tendril/particles/world.h"
 #include "tendril/render/plant_instances.h"
@@ -126,6 +128,32 @@ BENCHMARK(BM_InteractiveFrame)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond)
     ->Iterations(30);
+
+// The part of the snapshots that keeps every stem's bark off its support
+// (models/stand_off.h), on the plants as the models hand them out, plants in parallel as
+// Session::plants() does it.
+void BM_KeepStemsOutside(benchmark::State& state) {
+  Grown& g = grown(size_t(state.range(0)));
+  session::Session& s = *g.session;
+  std::vector<plant::PlantModel> raw;
+  for (models::PlantSystem* system : s.systems())
+    for (plant::PlantModel& p : system->snapshots()) raw.push_back(std::move(p));
+  size_t moved = 0, nodes = 0;
+  for (const plant::PlantModel& p : raw) nodes += p.nodeCount();
+  for (auto _ : state) {
+    state.PauseTiming();
+    std::vector<plant::PlantModel> plants = raw;
+    state.ResumeTiming();
+    std::vector<size_t> count(plants.size());
+    parallelFor(size_t(0), plants.size(), [&](size_t i) { count[i] = models::keepStemsOutside(plants[i], s.environment()); }, 1);
+    moved = 0;
+    for (size_t c : count) moved += c;
+    benchmark::DoNotOptimize(plants.data());
+  }
+  state.counters["segments"] = double(nodes);
+  state.counters["moved"] = double(moved);  // points moved plus leaves laid, shrunk or dropped
+}
+BENCHMARK(BM_KeepStemsOutside)->Arg(5000)->Arg(25000)->ArgName("particles")->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(20);
 
 }  // namespace
 }  // namespace tendril

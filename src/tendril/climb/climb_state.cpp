@@ -13,7 +13,26 @@ namespace tendril::climb {
 
 namespace {
 
-constexpr uint32_t kClimbTag = 0x4d4c4331;  // "1CLM"
+constexpr uint32_t kClimbTag = 0x4d4c4332;    // "2CLM" (2: tips carry Growth-Flow's length factor)
+constexpr uint32_t kClimbTagV1 = 0x4d4c4331;  // "1CLM": states saved before that
+
+// A tip as "1CLM" saved it: ClimbSystem::Tip without windLength, member for member.
+struct TipV1 {
+  uint64_t id = 0;
+  int32_t lastNode = -1;
+  Vec3 position = Vec3::Zero();
+  Vec3 dir = Vec3::UnitY();
+  Vec3 normal = Vec3::UnitZ();
+  float length = 0, radius = 0, leafSize = 0;
+  float leafThickness = 0;
+  float windAngle = -1.0f;
+  Vec3 shootStart = Vec3::Zero();
+  uint32_t segments = 0;
+  uint32_t unsupported = 0;
+  std::optional<env::SurfacePoint> support;
+  uint16_t order = 0;
+  bool startsBranch = false;
+};
 
 }  // namespace
 
@@ -39,7 +58,9 @@ void ClimbSystem::saveState(ArchiveWriter& out) const {
 }
 
 void ClimbSystem::loadState(ArchiveReader& in) {
-  in.tag(kClimbTag, "climbing plants");
+  const size_t tagAt = in.position();
+  const uint32_t tag = in.u32();
+  if (tag != kClimbTag && tag != kClimbTagV1) in.fail(tagAt, "expected the start of climbing plants (the data is damaged)");
   step_ = in.u32();
   const size_t at = in.position();
   const uint64_t n = in.u64();
@@ -49,7 +70,23 @@ void ClimbSystem::loadState(ArchiveReader& in) {
     plant::loadPlantModel(in, p->model);
     in.vector(p->birthStep);
     in.vector(p->nodeEnd);
-    in.vector(p->tips);
+    if (tag == kClimbTagV1) {
+      // Saved before tips carried Growth-Flow's length factor: taken as grown in still air.
+      std::vector<TipV1> old;
+      in.vector(old);
+      p->tips.resize(old.size());
+      for (size_t k = 0; k < old.size(); ++k) {
+        const TipV1& o = old[k];
+        Tip& t = p->tips[k];
+        t = Tip{};
+        t.id = o.id, t.lastNode = o.lastNode, t.position = o.position, t.dir = o.dir, t.normal = o.normal;
+        t.length = o.length, t.radius = o.radius, t.leafSize = o.leafSize, t.leafThickness = o.leafThickness;
+        t.windAngle = o.windAngle, t.shootStart = o.shootStart, t.segments = o.segments;
+        t.unsupported = o.unsupported, t.support = o.support, t.order = o.order, t.startsBranch = o.startsBranch;
+      }
+    } else {
+      in.vector(p->tips);
+    }
     p->nextTipId = in.u64();
     p->capped = in.boolean();
     const size_t nodes = p->model.nodeCount();
@@ -68,7 +105,7 @@ void ClimbSystem::loadState(ArchiveReader& in) {
     for (const Tip& t : p->tips)
       if (!near(t.position) || !near(t.dir) || !near(t.normal) || !near(t.shootStart) || !std::isfinite(t.length) ||
           !std::isfinite(t.radius) || !std::isfinite(t.leafSize) || !std::isfinite(t.leafThickness) ||
-          !std::isfinite(t.windAngle) ||
+          !std::isfinite(t.windAngle) || !(t.windLength > 0.0f && t.windLength <= 1.0f) ||
           (t.support && (!near(t.support->point) || !near(t.support->normal) || !near(t.support->away))))
         in.fail("a tip of a saved climbing plant holds a value out of range");
   }

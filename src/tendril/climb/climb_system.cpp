@@ -321,6 +321,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   if (turned) windTurn = Quat::FromTwoVectors(t.dir, plant::windGrowthDirection(t.dir, windHere, t.windAngle));
   if (flow.active()) {
     t.length *= flow.length;
+    t.windLength *= flow.length;
     if (s.growthFlow.maxLength > 0.0f) t.length = std::min(t.length, s.growthFlow.maxLength);
     t.radius *= flow.radius;
     t.leafSize *= flow.leafRadius;
@@ -340,7 +341,14 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   }
   const Vec3 end = segment->end, dir = segment->dir;
   const std::optional<env::SurfacePoint>& endSupport = segment->endSupport;
-  int crowd = s.crowdingRadius > 0.0f ? occupancy_.countWithin(end, s.crowdingRadius, s.crowdingLimit) : 0;
+  // Crowding is judged on the shoot's own scale: a shoot whose internodes the wind has made
+  // shorter (eq. 8) grows a smaller copy of its still-air self, and looks for crowding within
+  // as many of its own internodes as in still air. In a fixed sphere its shorter internodes
+  // would merely pack more segment ends together, and branching would stop in strong wind
+  // (0.14 of the still-air segments at 14 m/s, tests/wind/wind_on_a_wall_test.cpp). Still air
+  // leaves the radius exactly the species' one.
+  const float crowdingRadius = s.crowdingRadius * std::min(1.0f, t.windLength);
+  int crowd = s.crowdingRadius > 0.0f ? occupancy_.countWithin(end, crowdingRadius, s.crowdingLimit) : 0;
   if (s.crowdingRadius > 0.0f && crowd >= s.crowdingLimit) {
     out.dies = true;  // the plant already covers this spot
     return;

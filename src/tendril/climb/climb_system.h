@@ -84,6 +84,7 @@ class ClimbSystem {
     float length = 0, radius = 0, leafSize = 0;
     float leafThickness = 0;
     float windAngle = -1.0f;  // Growth-Flow's accumulated growth angle α (eq. 9); < 0: not yet in wind
+    float windLength = 1.0f;  // Growth-Flow's eq. 8 factor so far: the shoot's internodes relative to still air
     Vec3 shootStart = Vec3::Zero();  // (radius, length, leaf size) at the shoot's base
     uint32_t segments = 0;
     uint32_t unsupported = 0;  // segments in a row grown without support

@@ -74,7 +74,8 @@ struct ClimbSpecies {
   float branchAngleMin = radians(35.0f);
   float branchAngleMax = radians(40.0f);
   // Crowding: no branch, and the tip dies, where this many segments (of any plant) already
-  // lie within crowdingRadius. 0 disables.
+  // lie within crowdingRadius (in wind, times the shoot's eq. 8 length factor: see
+  // ClimbSystem::growTip). 0 disables.
   float crowdingRadius = 0.06f;  // m
   int crowdingLimit = 8;
 

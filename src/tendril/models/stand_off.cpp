@@ -1,5 +1,6 @@
 #include "tendril/models/stand_off.h"
 
+#include "tendril/core/curve.h"
 #include "tendril/core/parallel.h"
 
 #include <algorithm>
@@ -14,19 +15,24 @@ struct Ring {
 };
 
 // The push that clears point p of the surfaces near it for bark rings of these radii about
-// these directions.
-Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, size_t count, float margin) {
+// these directions. `deeper`: how far p may lie inside a surface (a point on a spline that
+// bows through it) beyond the rings' reach.
+Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, size_t count, float margin,
+               float deeper = 0.0f) {
   float reach = 0.0f;
   for (size_t k = 0; k < count; ++k) reach = std::max(reach, rings[k].radius);
   reach = 1.01f * reach + margin;
   if (!(reach > margin)) return Vec3::Zero();
+  reach += deeper;
   Vec3 push = Vec3::Zero();
   // Two passes: a point pushed off one surface (a wall) may come near another (the ground).
   for (int pass = 0; pass < 2; ++pass) {
     const Vec3 q = p + push;
     const std::optional<env::SurfacePoint> s = env.closestPoint(q, reach);
     if (!s) break;
-    const bool inside = env.exactSignedDistance(q, reach) < 0.0f;
+    // Outside a face the direction to the query is the face's normal; only near an edge or
+    // inside does it take the exact sign (angle-weighted pseudonormal).
+    const bool inside = s->away.dot(s->normal) < 0.5f && env.exactSignedDistance(q, reach) < 0.0f;
     const Vec3 n = inside ? s->normal : s->away;
     const float d = inside ? -s->distance : s->distance;
     float need = 0.0f;
@@ -39,6 +45,104 @@ Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, si
   return push;
 }
 
+// The corners of leaf blade j for a world rotation, size and petiole (as the leaf mesh draws
+// the blade: a quad from the petiole's end, half its aspect-scaled size either side of +Y).
+void bladeCorners(const plant::PlantModel& p, size_t j, const Vec3& attach, const Quat& rotation, float size,
+                  float petiole, Vec3 c[4]) {
+  const float aspect = p.leafShapes.empty() ? 1.0f : p.leafShapes[p.leafShape[j]].aspect;
+  const float hw = 0.5f * size * aspect;
+  const Mat3 r = rotation.toRotationMatrix();
+  c[0] = attach + r * Vec3(-hw, petiole, 0);
+  c[1] = attach + r * Vec3(hw, petiole, 0);
+  c[2] = attach + r * Vec3(hw, petiole + size, 0);
+  c[3] = attach + r * Vec3(-hw, petiole + size, 0);
+}
+
+// True if the blade touches a surface: its closed outline, reached from the attachment point
+// (attachment -> c0 -> c1 -> c2 -> c3 -> c0), crosses one, so some corner is inside or behind it.
+bool bladeBlocked(const env::Environment& env, const Vec3& attach, const Vec3 c[4]) {
+  const Vec3 from[5] = {attach, c[0], c[1], c[2], c[3]};
+  const Vec3 to[5] = {c[0], c[1], c[2], c[3], c[0]};
+  return env.anySegmentBlocked(from, to, 5);
+}
+
+// Leaves that pass through a surface (a particle plant's blades turned to the light into the
+// wall they grow on, a blade carried along by a stem moved off its support), or that a moved
+// stem carried round to face a surface within their reach, are laid parallel
+// to the surface nearest their attachment, upper side away from it, as climbing plants place
+// them (climb/climb_system.cpp, placeLeaves); where that is not enough they shrink (0.7, 0.45)
+// or, failing that, are dropped. Returns the number of leaves changed or dropped.
+// Only the leaves of nodes that moved (`movedNode`, empty: none) are checked for facing a
+// surface: a leaf the model placed keeps the side it was grown with.
+size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, const std::vector<uint8_t>& movedNode) {
+  const size_t count = p.leafCount();
+  std::vector<uint8_t> keep(count, 1), changed(count, 0);
+  std::vector<Quat> rotation(count);
+  std::vector<float> scale(count, 1.0f);
+  parallelFor(size_t(0), count, [&](size_t j) {
+    if (!(p.leafSize[j] > 0.0f)) return;
+    const Vec3 attach = p.leafWorldPosition(j);
+    const Quat world = p.leafWorldRotation(j);
+    Vec3 c[4];
+    bladeCorners(p, j, attach, world, p.leafSize[j], p.leafPetiole[j], c);
+    const float reach = p.leafPetiole[j] + p.leafSize[j];
+    std::optional<env::SurfacePoint> s;
+    bool facing = false;
+    if (!movedNode.empty() && movedNode[size_t(p.leafNode[j])]) {
+      // A blade within its own reach of a surface turns its upper side away from it, as
+      // clinging leaves do (a stem moved off its support may have carried one round to face it).
+      s = env.closestPoint(attach, reach);
+      facing = s && (world * Vec3::UnitZ()).dot(s->away) < 0.0f;
+    }
+    if (!facing && !bladeBlocked(env, attach, c)) return;
+    if (!s) s = env.closestPoint(attach, reach);
+    changed[j] = 1;
+    Quat laid = world;
+    if (s) {
+      Vec3 along = world * Vec3::UnitY();
+      along -= s->away * s->away.dot(along);
+      if (along.squaredNorm() < 1e-8f) along = anyPerpendicular(s->away);
+      laid = frameFromYZ(along.normalized(), s->away);
+    }
+    for (float k : {1.0f, 0.7f, 0.45f}) {
+      bladeCorners(p, j, attach, laid, k * p.leafSize[j], k * p.leafPetiole[j], c);
+      if (!bladeBlocked(env, attach, c)) {
+        rotation[j] = laid;
+        scale[j] = k;
+        return;
+      }
+    }
+    keep[j] = 0;
+  }, 256);
+  size_t touched = 0, kept = 0;
+  for (size_t j = 0; j < count; ++j) {
+    touched += changed[j];
+    if (!keep[j]) continue;
+    if (changed[j]) {
+      p.leafRotation[j] = (p.orientation[size_t(p.leafNode[j])].conjugate() * rotation[j]).normalized();
+      p.leafSize[j] *= scale[j];
+      p.leafPetiole[j] *= scale[j];
+    }
+    if (kept != j) {
+      p.leafNode[kept] = p.leafNode[j];
+      p.leafOffset[kept] = p.leafOffset[j];
+      p.leafRotation[kept] = p.leafRotation[j];
+      p.leafSize[kept] = p.leafSize[j];
+      p.leafThickness[kept] = p.leafThickness[j];
+      p.leafPetiole[kept] = p.leafPetiole[j];
+      p.leafShape[kept] = p.leafShape[j];
+      if (p.leafMotion.size() == count) p.leafMotion[kept] = p.leafMotion[j];
+    }
+    ++kept;
+  }
+  if (kept != count) {
+    p.leafNode.resize(kept), p.leafOffset.resize(kept), p.leafRotation.resize(kept), p.leafSize.resize(kept);
+    p.leafThickness.resize(kept), p.leafPetiole.resize(kept), p.leafShape.resize(kept);
+    if (p.leafMotion.size() == count) p.leafMotion.resize(kept);
+  }
+  return touched;
+}
+
 }  // namespace
 
 size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float margin) {
@@ -48,14 +152,17 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
   // tip. Segments meeting at a point move together.
   std::vector<Vec3> dir(n), point;
   std::vector<uint32_t> startPoint(n), tipPoint(n);
-  std::vector<int32_t> next(n, -1);  // the child continuing node i's chain from its tip
+  // The child continuing node i's bark chain, as the mesh sweeps it (mesh/branch_sweep.h: the
+  // first child that is not a branch start), whether or not it begins exactly at i's tip
+  // (particle plants' internodes leave small gaps).
+  std::vector<int32_t> next(n, -1);
   point.reserve(2 * n);
   for (size_t i = 0; i < n; ++i) {
     dir[i] = p.direction(i);
     const int32_t q = p.parent[i];
+    if (q >= 0 && next[size_t(q)] < 0 && !(p.flags[i] & plant::kNodeBranchStart)) next[size_t(q)] = int32_t(i);
     if (q >= 0 && (p.position[i] - point[tipPoint[size_t(q)]]).squaredNorm() <= 1e-12f) {
       startPoint[i] = tipPoint[size_t(q)];
-      if (next[size_t(q)] < 0 && !(p.flags[i] & plant::kNodeBranchStart)) next[size_t(q)] = int32_t(i);
     } else {
       startPoint[i] = uint32_t(point.size());
       point.push_back(p.position[i]);
@@ -85,26 +192,71 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
     if (planted[k]) return;
     move[k] = clearance(env, point[k], rings.data() + ringStart[k], ringStart[k + 1] - ringStart[k], margin);
   }, 256);
-  // Between its points the bark follows a spline (mesh/branch_sweep.h) that can bow toward a
-  // surface where the chain bends: the middle of each segment (Catmull-Rom) is cleared too, by
-  // moving both its points. In node order, so the result does not depend on the thread count.
+  // Between its points the bark follows a spline (mesh/branch_sweep.h: centripetal
+  // Catmull-Rom through the starts of a chain's nodes and its last tip) that can bow toward a
+  // surface where the chain bends: the spline is cleared too, at a third, half and two thirds
+  // of each span (the rings of the default mesh and the middle), by moving both ends of the
+  // span. The pushes are found in parallel and added in node order.
   auto at = [&](uint32_t k) { return Vec3(point[k] + move[k]); };
-  for (size_t i = 0; i < n; ++i) {
-    if (!(p.length[i] > 0.0f)) continue;
-    const int32_t q = p.parent[i];
-    const Vec3 a = at(startPoint[i]), b = at(tipPoint[i]);
-    const Vec3 before = q >= 0 && next[size_t(q)] == int32_t(i) ? at(startPoint[size_t(q)]) : Vec3(2.0f * a - b);
-    const Vec3 after = next[i] >= 0 ? at(tipPoint[size_t(next[i])]) : Vec3(2.0f * b - a);
-    const Vec3 mid = (9.0f * (a + b) - before - after) / 16.0f;
-    const Vec3 chord = b - a;
-    const float len = chord.norm();
-    if (!(len > 0.0f)) continue;
-    const float r = next[i] >= 0 ? std::max(p.radius[i], p.radius[size_t(next[i])]) : p.radius[i];
-    const Ring ring{r, chord / len};
-    const Vec3 push = clearance(env, mid, &ring, 1, margin);
-    if (push == Vec3::Zero()) continue;
-    if (!planted[startPoint[i]]) move[startPoint[i]] += push;
-    move[tipPoint[i]] += push;
+  std::vector<uint32_t> spanEnd(n);  // the point the bark's span from node i's start ends at
+  for (size_t i = 0; i < n; ++i) spanEnd[i] = next[i] >= 0 ? startPoint[size_t(next[i])] : tipPoint[i];
+  // Pushing a span's ends changes its neighbours' bows: up to three rounds, until no span needs
+  // a push.
+  // After the first round only spans with a control point pushed in the round before are
+  // looked at again.
+  std::vector<Vec3> midPush(n);
+  std::vector<uint8_t> pushedPoint(m, 1);
+  for (int round = 0; round < 3; ++round) {
+    parallelFor(size_t(0), n, [&](size_t i) {
+      midPush[i] = Vec3::Zero();
+      if (!(p.length[i] > 0.0f)) return;
+      const int32_t q = p.parent[i], c = next[i];
+      if (round > 0 && !pushedPoint[startPoint[i]] && !pushedPoint[spanEnd[i]] &&
+          !(q >= 0 && next[size_t(q)] == int32_t(i) && pushedPoint[startPoint[size_t(q)]]) &&
+          !(c >= 0 && pushedPoint[spanEnd[size_t(c)]]))
+        return;
+      const Vec3 a = at(startPoint[i]), b = at(spanEnd[i]);
+      const Vec3 chord = b - a;
+      const float len = chord.norm();
+      if (!(len > 1e-6f)) return;
+      const Vec3 before = q >= 0 && next[size_t(q)] == int32_t(i) ? at(startPoint[size_t(q)]) : Vec3(2.0f * a - b);
+      const Vec3 after = c >= 0 ? at(spanEnd[size_t(c)]) : Vec3(2.0f * b - a);
+      const CurveSegment curve = centripetalCatmullRom(before, a, b, after);
+      const float r = c >= 0 ? std::max(p.radius[i], p.radius[size_t(c)]) : p.radius[i];
+      for (float s : {1.0f / 3.0f, 0.5f, 2.0f / 3.0f}) {
+        const Vec3 d = curve.derivative(s);
+        const float dn = d.norm();
+        const Ring ring{r, dn > 1e-6f * len ? Vec3(d / dn) : Vec3(chord / len)};
+        // The span's ends are clear, so a surface the curve bows through lies no further from
+        // the curve point than the chord does.
+        const Vec3 onCurve = curve.point(s);
+        const float bow = (onCurve - (a + s * chord)).norm();
+        Vec3 push = clearance(env, onCurve, &ring, 1, margin, bow);
+        if (push == Vec3::Zero()) continue;
+        // The span's neighbours stay, so the curve there moves by less than its ends: push the
+        // ends by as much more as it takes (at most 4 times the push).
+        const Vec3 shifted = centripetalCatmullRom(before, a + push, b + push, after).point(s) - onCurve;
+        push /= std::clamp(shifted.dot(push) / push.squaredNorm(), 0.25f, 1.0f);
+        if (push.squaredNorm() > midPush[i].squaredNorm()) midPush[i] = push;
+      }
+    }, 256);
+    // A span ends at its node's tip where the chain's next node starts there (climbing and
+    // L-system plants); across a gap (particle plants) it ends at the next node's start, and
+    // both nodes move whole, so that no node changes its length.
+    bool pushed = false;
+    std::fill(pushedPoint.begin(), pushedPoint.end(), 0);
+    auto push = [&](uint32_t k, const Vec3& v) { move[k] += v, pushedPoint[k] = 1; };
+    for (size_t i = 0; i < n; ++i) {
+      if (midPush[i] == Vec3::Zero()) continue;
+      if (!planted[startPoint[i]]) push(startPoint[i], midPush[i]);
+      push(tipPoint[i], midPush[i]);
+      if (spanEnd[i] != tipPoint[i]) {
+        push(spanEnd[i], midPush[i]);
+        push(tipPoint[size_t(next[i])], midPush[i]);
+      }
+      pushed = true;
+    }
+    if (!pushed) break;
   }
   // No move may carry a point through a surface or a segment into one (a tight hole, a point
   // pushed off one surface onto another): such points stay where they were, and so, in turn,
@@ -114,15 +266,20 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
     const Vec3 to = point[k] + move[k];
     if (env.countSegmentHits(point[k], to) > 0 || env.exactSignedDistance(to, 1e-3f) < 0.0f) move[k] = Vec3::Zero();
   }, 256);
+  std::vector<uint8_t> crosses(n, 0);
   for (int pass = 0; pass < 4; ++pass) {
-    bool reverted = false;
-    for (size_t i = 0; i < n; ++i) {
+    parallelFor(size_t(0), n, [&](size_t i) {
       const uint32_t a = startPoint[i], b = tipPoint[i];
-      if (move[a] == Vec3::Zero() && move[b] == Vec3::Zero()) continue;
-      if (env.countSegmentHits(at(a), at(b)) <= env.countSegmentHits(point[a], point[b])) continue;
-      move[a] = move[b] = Vec3::Zero();
-      reverted = true;
-    }
+      if (move[a] == Vec3::Zero() && move[b] == Vec3::Zero()) {
+        crosses[i] = 0;
+        return;
+      }
+      const size_t hits = env.countSegmentHits(at(a), at(b));
+      crosses[i] = hits > 0 && hits > env.countSegmentHits(point[a], point[b]);
+    }, 256);
+    bool reverted = false;
+    for (size_t i = 0; i < n; ++i)
+      if (crosses[i]) move[startPoint[i]] = move[tipPoint[i]] = Vec3::Zero(), reverted = true;
     if (!reverted) break;
   }
   // Apply: positions, lengths and orientations follow the points.
@@ -130,7 +287,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
   const std::vector<Quat> oldOrientation = p.orientation;
   size_t moved = 0;
   for (size_t k = 0; k < m; ++k) moved += move[k] != Vec3::Zero();
-  if (moved == 0) return 0;
+  if (moved == 0) return keepLeavesOutside(p, env, {});
   for (size_t i = 0; i < n; ++i) {
     const Vec3 a = at(startPoint[i]), b = at(tipPoint[i]);
     p.position[i] = a;
@@ -153,7 +310,9 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
     p.leafOffset[j] = inverse * (world - p.position[i]);
     p.leafRotation[j] = (inverse * worldRotation).normalized();
   }
-  return moved;
+  std::vector<uint8_t> movedNode(n);
+  for (size_t i = 0; i < n; ++i) movedNode[i] = move[startPoint[i]] != Vec3::Zero() || move[tipPoint[i]] != Vec3::Zero();
+  return moved + keepLeavesOutside(p, env, movedNode);
 }
 
 }  // namespace tendril::models

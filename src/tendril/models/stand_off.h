@@ -14,8 +14,11 @@ namespace tendril::models {
 // of the nearest obstacle surface until the bark ring there — radius r, perpendicular to the
 // segment — keeps `margin` (plus 1 % of r) off it. A ring lying in the surface (a trunk
 // standing on the ground) needs no clearance. Lengths and orientations follow the moved
-// points; leaves keep their world rotation and move with their node's start. Returns the
-// number of points moved.
+// points; leaves keep their world rotation and move with their node's start. Then every leaf
+// blade that passes through a surface, or whose moved node leaves its upper side facing a
+// surface within the blade's reach, is laid parallel to the surface nearest its attachment
+// (upper side away from it), shrunk to 0.7 or 0.45 of its size if that is not enough, or
+// dropped. Returns the number of points moved plus the number of leaves changed or dropped.
 size_t keepStemsOutside(plant::PlantModel& plant, const env::Environment& env, float margin = 1e-4f);
 
 }  // namespace tendril::models

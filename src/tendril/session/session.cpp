@@ -4,6 +4,7 @@
 #include "tendril/core/archive.h"
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
+#include "tendril/core/parallel.h"
 #include "tendril/env/mesh_import.h"
 #include "tendril/models/stand_off.h"
 #include "tendril/scene/settings_schema.h"
@@ -180,7 +181,7 @@ std::vector<plant::PlantModel> Session::plants() const {
   out.reserve(plants_.size());
   for (const PlantRef& r : plants_) out.push_back(std::move(bySystem[r.system].at(r.index)));
   // Every model's stems, thickened since they were placed, clear of their supports.
-  for (plant::PlantModel& p : out) models::keepStemsOutside(p, *env_);
+  parallelFor(size_t(0), out.size(), [&](size_t i) { models::keepStemsOutside(out[i], *env_); }, 1);
   return out;
 }
 
