@@ -34,8 +34,8 @@
 // [gustMin, 1] of the wind at its node; eq. 10–15 move its angles (growth_flow.h). The type
 // follows §3.2.1's rule (plant::leafMotionChances): a blade facing the wind bends, one oblique
 // to it twists, one parallel to it vibrates, drawn with chances from the angle between the
-// blade's rest normal and the wind at its node (Algorithm 2 draws 1/3 each). A leaf's posed rotation is
-// its rest rotation · R_Y(ψ) · R_X(θ + φ) (twist about the petiole, petiole bend and vibration
+// blade's rest normal and the wind at its node (Algorithm 2 draws 1/3 each). A leaf's posed
+// rotation is its rest rotation · R_Y(ψ) · R_X(θ + φ) (twist about the petiole, petiole bend and vibration
 // about the blade's width axis at the petiole); the blade bend β goes to leafMotion.x, where
 // the leaf mesh curls the blade, and leafMotion = (β, ψ, φ). Detached leaves are left out of
 // the posed plant from then on.
@@ -110,8 +110,8 @@ class WindMotion {
   // Advances one frame to time t (s) with frame length dt and writes the posed plant (the rest
   // plant with swayed nodes and moved leaves; detached leaves left out). Without a loop the
   // sway integrates eq. 1 over dt under the wind at t (dt ≤ 0: the pose is recomposed only);
-  // in a loop it is the periodic solution at t, whatever frames came before. Pass the same `posed`
-  // frame after frame and leave it unchanged in between: what does not move (lengths, radii,
+  // in a loop it is the periodic solution at t, whatever frames came before. Pass the same
+  // `posed` frame after frame and leave it unchanged in between: what does not move (lengths, radii,
   // topology, primitive meshes) is copied from the rest plant only into a new `posed`.
   void step(float t, float dt, const env::WindField& wind, plant::PlantModel& posed);
 
