@@ -92,6 +92,55 @@ TEST(Environment, ClosestPointMatchesBruteForce) {
   }
 }
 
+TEST(Environment, AFewTrianglesGiveTheTraversalsClosestPoints) {
+  // A box wall and a ground plane (24 triangles: the queries test each triangle's box) against
+  // the same with a fine sphere far away (over the limit: Embree's traversal): every closest
+  // point, with and without a facing filter and a hint, is the same point at the same distance.
+  // Where the wall stands on the ground two triangles can be as near to the last bit of float;
+  // there the traversal may have skipped the nearer one, so only which one is named may differ.
+  auto fill = [](Environment& env, bool farSphere) {
+    env.addObstacle(def("ground", makePlane(Vec2(10, 10), 0.0f)));
+    env.addObstacle(def("wall", makeBox(Vec3(4, 2.5f, 0.2f)), {axisAngle(Vec3(0, 1, 0), 0.3f), Vec3(0, 1.25f, -0.1f)}));
+    if (farSphere) env.addObstacle(def("far", makeSphere(1.0f, 4), {Quat::Identity(), Vec3(0, 0, 500)}));
+    env.commit();
+  };
+  Environment few, many;
+  fill(few, false);
+  fill(many, true);
+  Rng rng(RandomKey{12});
+  int ties = 0;
+  for (int i = 0; i < 4000; ++i) {
+    const Vec3 p(rng.uniform(-2.5f, 2.5f), rng.uniform(-0.2f, 2.8f), rng.uniform(-0.6f, 0.6f));
+    const float radius = i % 2 ? 0.05f : 5.0f;
+    const Vec3 facing = Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)).normalized();
+    const std::optional<SurfacePoint> a = few.closestPoint(p, radius), b = many.closestPoint(p, radius);
+    const std::optional<SurfacePoint> fa = few.closestPointFacing(p, radius, facing, 0.2f),
+                                      fb = many.closestPointFacing(p, radius, facing, 0.2f);
+    for (const auto& [x, y] : {std::pair{&a, &b}, std::pair{&fa, &fb}}) {
+      ASSERT_EQ(x->has_value(), y->has_value()) << "at " << p.transpose();
+      if (!x->has_value()) continue;
+      ASSERT_LE((*x)->distance, (*y)->distance) << "at " << p.transpose();  // never farther
+      ASSERT_NEAR((*x)->distance, (*y)->distance, 1e-6f) << "at " << p.transpose();
+      ASSERT_LT(((*x)->point - (*y)->point).norm(), 1e-5f);
+      if ((*x)->obstacle == (*y)->obstacle && (*x)->triangle == (*y)->triangle) {
+        ASSERT_EQ((*x)->point, (*y)->point) << "at " << p.transpose();
+        ASSERT_EQ((*x)->normal, (*y)->normal);
+        ASSERT_EQ((*x)->away, (*y)->away);
+        ASSERT_EQ((*x)->distance, (*y)->distance);
+      } else {
+        ++ties;
+      }
+    }
+    if (a) {
+      const std::optional<SurfacePoint> ha = few.closestPoint(p, radius, &*a), hb = many.closestPoint(p, radius, &*b);
+      ASSERT_TRUE(ha && hb);
+      ASSERT_NEAR(ha->distance, a->distance, 1e-6f);
+      ASSERT_NEAR(hb->distance, b->distance, 1e-6f);
+    }
+  }
+  EXPECT_LT(ties, 40) << "ties are rare: points near the wall's foot";
+}
+
 TEST(Environment, ExactSignedDistanceIsNegativeInsideOnly) {
   Environment env;
   env.addObstacle(def("box", makeBox(Vec3(1, 1, 1))));

@@ -123,10 +123,11 @@ struct ClosestSearch {
   TriangleFeature bestFeature = TriangleFeature::Face;
 };
 
-bool closestCallback(RTCPointQueryFunctionArguments* args) {
-  auto* s = static_cast<ClosestSearch*>(args->userPtr);
-  const Vec3* v = s->vertices[args->geomID];
-  const uint32_t* tri = s->indices[args->geomID] + 3 * size_t(args->primID);
+// Triangle `primID` of obstacle `geomID` as a candidate of the search; shrinks `radius` to the
+// best distance found. Returns whether it did.
+bool considerTriangle(ClosestSearch* s, uint32_t geomID, uint32_t primID, float* radius) {
+  const Vec3* v = s->vertices[geomID];
+  const uint32_t* tri = s->indices[geomID] + 3 * size_t(primID);
   ClosestOnTriangle c = closestPointOnTriangle(s->p, v[tri[0]], v[tri[1]], v[tri[2]]);
   float d2 = (c.point - s->p).squaredNorm();
   if (s->facing && d2 < s->bestDist2) {
@@ -137,20 +138,24 @@ bool closestCallback(RTCPointQueryFunctionArguments* args) {
   }
   // Ties are broken by (geometry, primitive) so the answer never depends on traversal order.
   bool better = d2 < s->bestDist2 ||
-                (d2 == s->bestDist2 && (args->geomID < s->bestGeom ||
-                                        (args->geomID == s->bestGeom && args->primID < s->bestPrim)));
+                (d2 == s->bestDist2 && (geomID < s->bestGeom || (geomID == s->bestGeom && primID < s->bestPrim)));
   if (!better) return false;
   s->bestDist2 = d2;
   s->bestPoint = c.point;
-  s->bestGeom = args->geomID;
-  s->bestPrim = args->primID;
+  s->bestGeom = geomID;
+  s->bestPrim = primID;
   s->bestFeature = c.feature;
   float r = std::sqrt(d2);
-  if (r < args->query->radius) {
-    args->query->radius = r;
+  if (r < *radius) {
+    *radius = r;
     return true;
   }
   return false;
+}
+
+bool closestCallback(RTCPointQueryFunctionArguments* args) {
+  return considerTriangle(static_cast<ClosestSearch*>(args->userPtr), args->geomID, args->primID,
+                          &args->query->radius);
 }
 
 void runClosest(RTCScene scene, ClosestSearch& s, float radius) {
@@ -347,6 +352,21 @@ void Environment::commit() {
   }
   rtcCommitScene(scene);
 
+  // A scene of a few triangles in all (walls, boxes, planes): closest-point queries test each
+  // triangle's box themselves, which is several times cheaper than a traversal and its callbacks.
+  smallScene_.clear();
+  size_t triangles = 0;
+  for (const auto& o : obstacles_) triangles += o->welded.indices.size() / 3;
+  if (triangles <= kSmallSceneTriangles)
+    for (uint32_t id = 0; id < obstacles_.size(); ++id) {
+      const ObstacleData& o = *obstacles_[id];
+      for (uint32_t t = 0; t < o.welded.indices.size() / 3; ++t) {
+        const uint32_t* tri = &o.welded.indices[3 * size_t(t)];
+        const Vec3 &a = o.world[tri[0]], &b = o.world[tri[1]], &c = o.world[tri[2]];
+        smallScene_.push_back(TriangleBox{a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c), id, t});
+      }
+    }
+
   // Stroke lookup grid.
   StrokeGrid& g = *strokeGrid_;
   g = StrokeGrid();
@@ -516,7 +536,14 @@ std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, co
     }
   }
   ClosestSearch s{verts, inds, p, r * r, direction, cosLimit};
-  runClosest(static_cast<RTCScene>(scene_), s, r);
+  if (!smallScene_.empty()) {
+    // Every triangle whose box is within the best distance so far, in (obstacle, triangle)
+    // order: ties included, so the answer is the one the traversal gives.
+    for (const TriangleBox& b : smallScene_)
+      if ((p.cwiseMax(b.lo).cwiseMin(b.hi) - p).squaredNorm() <= s.bestDist2) considerTriangle(&s, b.geom, b.prim, &r);
+  } else {
+    runClosest(static_cast<RTCScene>(scene_), s, r);
+  }
   if (s.bestGeom == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   const ObstacleData& o = *obstacles_[s.bestGeom];
   SurfacePoint sp;

@@ -180,6 +180,14 @@ class Environment {
   const SdfGrid& distanceField(const ObstacleData& o) const;
 
   std::vector<std::unique_ptr<ObstacleData>> obstacles_;
+  // With at most kSmallSceneTriangles triangles in all, every triangle's world box (by obstacle,
+  // then triangle): closest-point queries test them in turn instead of traversing Embree's BVH.
+  static constexpr size_t kSmallSceneTriangles = 64;
+  struct TriangleBox {
+    Vec3 lo, hi;
+    uint32_t geom, prim;
+  };
+  std::vector<TriangleBox> smallScene_;
   std::vector<Light> lights_;
   std::vector<Stroke> strokes_;
   std::unique_ptr<StrokeGrid> strokeGrid_;
