@@ -38,6 +38,35 @@ TEST(PlantModel, StatsOfAChain) {
   EXPECT_NO_THROW(validate(p, "t"));
 }
 
+TEST(PlantModel, KeepLeavesKeepsTheChosenOnesInOrder) {
+  PlantModel p = chain(3);
+  for (int j = 0; j < 6; ++j) {
+    PlantModel::LeafDef l;
+    l.node = j % 3;
+    l.size = 0.01f * float(j + 1);
+    l.petiole = 0.002f * float(j);
+    l.shape = uint16_t(j);
+    p.addLeaf(l);
+    p.leafMotion.back() = Vec3(float(j), 0, 0);
+  }
+  p.keepLeaves({0, 1, 2, 3, 4, 5});
+  ASSERT_EQ(p.leafCount(), 6u);
+  p.keepLeaves({1, 4, 5});
+  ASSERT_EQ(p.leafCount(), 3u);
+  ASSERT_EQ(p.leafMotion.size(), 3u);
+  const int was[3] = {1, 4, 5};
+  for (size_t o = 0; o < 3; ++o) {
+    EXPECT_EQ(p.leafNode[o], was[o] % 3);
+    EXPECT_FLOAT_EQ(p.leafSize[o], 0.01f * float(was[o] + 1));
+    EXPECT_FLOAT_EQ(p.leafPetiole[o], 0.002f * float(was[o]));
+    EXPECT_EQ(p.leafShape[o], uint16_t(was[o]));
+    EXPECT_EQ(p.leafMotion[o].x(), float(was[o]));
+  }
+  p.keepLeaves({});
+  EXPECT_EQ(p.leafCount(), 0u);
+  EXPECT_NO_THROW(validate(p, "test"));
+}
+
 TEST(PlantModel, ValidateRejectsBadData) {
   PlantModel p = chain(3);
   p.radius[1] = std::numeric_limits<float>::quiet_NaN();

@@ -114,7 +114,9 @@ size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, cons
     }
     keep[j] = 0;
   }, 256);
-  size_t touched = 0, kept = 0;
+  size_t touched = 0;
+  std::vector<uint32_t> kept;
+  kept.reserve(count);
   for (size_t j = 0; j < count; ++j) {
     touched += changed[j];
     if (!keep[j]) continue;
@@ -123,23 +125,9 @@ size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, cons
       p.leafSize[j] *= scale[j];
       p.leafPetiole[j] *= scale[j];
     }
-    if (kept != j) {
-      p.leafNode[kept] = p.leafNode[j];
-      p.leafOffset[kept] = p.leafOffset[j];
-      p.leafRotation[kept] = p.leafRotation[j];
-      p.leafSize[kept] = p.leafSize[j];
-      p.leafThickness[kept] = p.leafThickness[j];
-      p.leafPetiole[kept] = p.leafPetiole[j];
-      p.leafShape[kept] = p.leafShape[j];
-      if (p.leafMotion.size() == count) p.leafMotion[kept] = p.leafMotion[j];
-    }
-    ++kept;
+    kept.push_back(uint32_t(j));
   }
-  if (kept != count) {
-    p.leafNode.resize(kept), p.leafOffset.resize(kept), p.leafRotation.resize(kept), p.leafSize.resize(kept);
-    p.leafThickness.resize(kept), p.leafPetiole.resize(kept), p.leafShape.resize(kept);
-    if (p.leafMotion.size() == count) p.leafMotion.resize(kept);
-  }
+  p.keepLeaves(kept);
   return touched;
 }
 

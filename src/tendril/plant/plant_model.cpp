@@ -33,6 +33,19 @@ int32_t PlantModel::addLeaf(const LeafDef& d) {
   return static_cast<int32_t>(leafNode.size() - 1);
 }
 
+void PlantModel::keepLeaves(const std::vector<uint32_t>& kept) {
+  const size_t count = leafCount();
+  if (kept.size() == count) return;  // ascending and all of them: every leaf stays
+  // Ascending indices: leaf kept[o] moves down to o, never over one still to be read.
+  auto pick = [&](auto& v) {
+    for (size_t o = 0; o < kept.size(); ++o) v[o] = v[kept[o]];
+    v.resize(kept.size());
+  };
+  pick(leafNode), pick(leafOffset), pick(leafRotation), pick(leafSize);
+  pick(leafThickness), pick(leafPetiole), pick(leafShape);
+  if (leafMotion.size() == count) pick(leafMotion);
+}
+
 void PlantModel::reserve(size_t nodes, size_t leaves) {
   position.reserve(nodes);
   orientation.reserve(nodes);

@@ -113,6 +113,9 @@ struct PlantModel {
   // Appends a node / leaf and returns its index.
   int32_t addNode(const NodeDef& def);
   int32_t addLeaf(const LeafDef& def);
+  // Keeps only the leaves kept[0], kept[1], … (ascending indices), in that order; the others
+  // are removed (leafMotion too, where the plant carries it).
+  void keepLeaves(const std::vector<uint32_t>& kept);
   void reserve(size_t nodes, size_t leaves);
   void clear();
 

@@ -141,19 +141,7 @@ plant::PlantModel withoutTornLeaves(const plant::PlantModel& rest, const LeafLoo
   kept.clear();
   for (size_t j = 0; j < rest.leafCount(); ++j)
     if (!loop.leaves[j].torn) kept.push_back(uint32_t(j));
-  if (kept.size() == rest.leafCount()) return out;
-  auto pick = [&](auto& dst, const auto& src) {
-    dst.resize(kept.size());
-    for (size_t o = 0; o < kept.size(); ++o) dst[o] = src[kept[o]];
-  };
-  pick(out.leafNode, rest.leafNode);
-  pick(out.leafOffset, rest.leafOffset);
-  pick(out.leafRotation, rest.leafRotation);
-  pick(out.leafSize, rest.leafSize);
-  pick(out.leafThickness, rest.leafThickness);
-  pick(out.leafPetiole, rest.leafPetiole);
-  pick(out.leafShape, rest.leafShape);
-  if (rest.leafMotion.size() == rest.leafCount()) pick(out.leafMotion, rest.leafMotion);
+  out.keepLeaves(kept);
   return out;
 }
 
