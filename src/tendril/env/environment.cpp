@@ -354,18 +354,28 @@ void Environment::commit() {
 
   // A scene of a few triangles in all (walls, boxes, planes): closest-point queries test each
   // triangle's box themselves, which is several times cheaper than a traversal and its callbacks.
-  smallScene_.clear();
+  smallScene_ = SmallScene{};
   size_t triangles = 0;
   for (const auto& o : obstacles_) triangles += o->welded.indices.size() / 3;
-  if (triangles <= kSmallSceneTriangles)
+  if (triangles <= kSmallSceneTriangles) {
+    SmallScene& ss = smallScene_;
     for (uint32_t id = 0; id < obstacles_.size(); ++id) {
       const ObstacleData& o = *obstacles_[id];
       for (uint32_t t = 0; t < o.welded.indices.size() / 3; ++t) {
         const uint32_t* tri = &o.welded.indices[3 * size_t(t)];
         const Vec3 &a = o.world[tri[0]], &b = o.world[tri[1]], &c = o.world[tri[2]];
-        smallScene_.push_back(TriangleBox{a.cwiseMin(b).cwiseMin(c), a.cwiseMax(b).cwiseMax(c), id, t});
+        const Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
+        for (int k = 0; k < 3; ++k) ss.lo[k].push_back(lo[k]), ss.hi[k].push_back(hi[k]);
+        ss.geom.push_back(id);
+        ss.prim.push_back(t);
       }
     }
+    ss.count = ss.geom.size();
+    // Padding boxes lie infinitely far from every point.
+    const float inf = std::numeric_limits<float>::infinity();
+    const size_t padded = (ss.count + 7) / 8 * 8;
+    for (int k = 0; k < 3; ++k) ss.lo[k].resize(padded, inf), ss.hi[k].resize(padded, inf);
+  }
 
   // Stroke lookup grid.
   StrokeGrid& g = *strokeGrid_;
@@ -536,11 +546,25 @@ std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, co
     }
   }
   ClosestSearch s{verts, inds, p, r * r, direction, cosLimit};
-  if (!smallScene_.empty()) {
+  if (smallScene_.count > 0) {
     // Every triangle whose box is within the best distance so far, in (obstacle, triangle)
-    // order: ties included, so the answer is the one the traversal gives.
-    for (const TriangleBox& b : smallScene_)
-      if ((p.cwiseMax(b.lo).cwiseMin(b.hi) - p).squaredNorm() <= s.bestDist2) considerTriangle(&s, b.geom, b.prim, &r);
+    // order: ties included, so the answer is the one the traversal gives. The boxes' distances
+    // do not depend on the search, so they are all found first, in one vectorised loop.
+    const SmallScene& ss = smallScene_;
+    const size_t padded = ss.lo[0].size();
+    alignas(32) float boxDist2[kSmallSceneTriangles + 8];
+    const float px = p.x(), py = p.y(), pz = p.z();
+    const float *lx = ss.lo[0].data(), *ly = ss.lo[1].data(), *lz = ss.lo[2].data();
+    const float *hx = ss.hi[0].data(), *hy = ss.hi[1].data(), *hz = ss.hi[2].data();
+    for (size_t i0 = 0; i0 < padded; i0 += 8)
+      for (size_t i = i0; i < i0 + 8; ++i) {
+        const float dx = std::min(std::max(px, lx[i]), hx[i]) - px;
+        const float dy = std::min(std::max(py, ly[i]), hy[i]) - py;
+        const float dz = std::min(std::max(pz, lz[i]), hz[i]) - pz;
+        boxDist2[i] = dx * dx + dy * dy + dz * dz;
+      }
+    for (size_t i = 0; i < ss.count; ++i)
+      if (boxDist2[i] <= s.bestDist2) considerTriangle(&s, ss.geom[i], ss.prim[i], &r);
   } else {
     runClosest(static_cast<RTCScene>(scene_), s, r);
   }

@@ -182,12 +182,15 @@ class Environment {
   std::vector<std::unique_ptr<ObstacleData>> obstacles_;
   // With at most kSmallSceneTriangles triangles in all, every triangle's world box (by obstacle,
   // then triangle): closest-point queries test them in turn instead of traversing Embree's BVH.
+  // The boxes are kept coordinate by coordinate, so the distances to all of them are found
+  // four or eight at a time before any triangle is looked at.
   static constexpr size_t kSmallSceneTriangles = 64;
-  struct TriangleBox {
-    Vec3 lo, hi;
-    uint32_t geom, prim;
+  struct SmallScene {
+    size_t count = 0;
+    std::vector<float> lo[3], hi[3];  // per box, padded to a multiple of 8 with empty boxes
+    std::vector<uint32_t> geom, prim;
   };
-  std::vector<TriangleBox> smallScene_;
+  SmallScene smallScene_;
   std::vector<Light> lights_;
   std::vector<Stroke> strokes_;
   std::unique_ptr<StrokeGrid> strokeGrid_;
