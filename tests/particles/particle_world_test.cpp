@@ -7,6 +7,7 @@
 #include "tendril/core/json_reader.h"
 #include "tendril/core/random.h"
 #include "tendril/env/primitives.h"
+#include "tendril/models/stand_off.h"
 #include "tendril/particles/particle_model.h"
 #include "tendril/scene/scene.h"
 
@@ -134,6 +135,46 @@ TEST(ParticleGrowth, APlantSeededByAWallClimbsIt) {
   ASSERT_GT(onWall, 200u);
   EXPECT_GT(top, 0.8f) << "the plant should reach up the wall";
   EXPECT_GE(double(anchored) / double(onWall), 0.6) << anchored << " of " << onWall << " stems on the wall";
+}
+
+// The model itself keeps what it grows outside the wall (seed 000 §5.2, collisions of every
+// organ), so the stand-off pass (models/stand_off.h) has next to nothing to move: capsules
+// collide at their bark's clearance, and blades grown by a support lie on it.
+TEST(ParticleGrowth, StemsKeepTheirBarkOffTheWallAndLeavesLieOnIt) {
+  auto env = makeEnv(kGroundAndWall);
+  ParticleWorld w;
+  ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
+  s.maxParticles = 1500;
+  const uint32_t p = w.addPlant("ivy", s, Vec3(0, 0.03f, 0.11f), Vec3(0, 1, 0), 1, *env);
+  for (int k = 0; k < 700; ++k) w.step(*env);
+  const plant::PlantModel m = w.snapshot(p);  // as the model has it, before any stand-off pass
+  // The wall's face is z = 0.1; stems in front of it, away from its edges and the ground.
+  auto onFace = [](const Vec3& x) { return x.y() > 0.1f && x.y() < 2.4f && std::abs(x.x()) < 1.4f && x.z() < 0.2f; };
+  size_t ends = 0, clear = 0;
+  for (size_t i = 0; i < m.nodeCount(); ++i)
+    for (const Vec3& x : {m.position[i], m.tip(i)}) {
+      if (!onFace(x)) continue;
+      ++ends;
+      clear += x.z() - 0.1f >= models::barkClearance(m.radius[i]) - 1e-6f;
+    }
+  ASSERT_GT(ends, 400u);
+  EXPECT_GE(double(clear) / double(ends), 0.97) << clear << " of " << ends << " stem ends keep their bark off the wall";
+  // Blades: a blade crossing the face has corners on both sides of it or behind it.
+  size_t blades = 0, through = 0;
+  for (size_t j = 0; j < m.leafCount(); ++j) {
+    const Vec3 attach = m.leafWorldPosition(j);
+    if (!onFace(attach) || !(m.leafSize[j] > 0.0f)) continue;
+    ++blades;
+    const Quat r = m.leafWorldRotation(j);
+    const float hw = 0.5f * m.leafSize[j] * (m.leafShapes.empty() ? 1.0f : m.leafShapes[m.leafShape[j]].aspect);
+    bool behind = false;
+    for (const Vec3& c : {Vec3(-hw, m.leafPetiole[j], 0), Vec3(hw, m.leafPetiole[j], 0),
+                          Vec3(hw, m.leafPetiole[j] + m.leafSize[j], 0), Vec3(-hw, m.leafPetiole[j] + m.leafSize[j], 0)})
+      behind = behind || (attach + r * c).z() < 0.1f;
+    through += behind;
+  }
+  ASSERT_GT(blades, 100u);
+  EXPECT_LE(double(through) / double(blades), 0.2) << through << " of " << blades << " blades reach behind the wall's face";
 }
 
 // Mean x of a free-standing plant's stems under a light.

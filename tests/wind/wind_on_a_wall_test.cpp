@@ -78,7 +78,8 @@ bool insideWall(const Vec3& p) {
 }
 
 // `into`: wind toward the wall (−Z), `along` (+X), `away` (+Z).
-WallRun growOnWall(Model m, float speed, const std::string& direction, int seed) {
+// `subdivisions`: the scene's output setting, which the bark is cleared for and meshed with.
+WallRun growOnWall(Model m, float speed, const std::string& direction, int seed, int subdivisions = 3) {
   Vec3 w = direction == "into" ? Vec3(0, 0, -speed) : direction == "along" ? Vec3(speed, 0, 0) : Vec3(0, 0, speed);
   const int steps = stepsOf(m);
   std::string json = std::string(R"({"tendril": 1, "seed": 4, "steps": )") + std::to_string(steps) +
@@ -87,6 +88,7 @@ WallRun growOnWall(Model m, float speed, const std::string& direction, int seed)
         {"name": "wall", "type": "wall", "size": [4, 2.5, 0.2]}],
       "lights": [{"type": "directional", "direction": [-0.1, -1, -0.4]}],
       "wind": {"velocity": [)" + std::to_string(w.x()) + ", 0, " + std::to_string(w.z()) + R"(]}},
+    "output": {"subdivisions": )" + std::to_string(subdivisions) + R"(},
     "plants": [)" + plantJson(m, seed) + "]}";
   scene::Scene s = scene::parseScene(parseJson(json, "test scene"), "test scene", test::sourceDir());
   session::Session session(std::move(s));
@@ -101,7 +103,9 @@ WallRun growOnWall(Model m, float speed, const std::string& direction, int seed)
     r.length = p.length;
     r.units = unitsOf(m, p);
   }
-  const mesh::PlantMesh mesh = mesh::buildPlantMesh(p);
+  mesh::MeshOptions options;
+  options.subdivisions = subdivisions;
+  const mesh::PlantMesh mesh = mesh::buildPlantMesh(p, options);
   r.barkVertices = mesh.bark.positions.size();
   for (const Vec3& v : mesh.bark.positions) r.barkInside += insideWall(v);
   const test::ClimbReport c = test::checkClimbingPlant(p, session.environment(), 0.08f);
@@ -198,6 +202,18 @@ void expectWindKeepsThePlantOutsideItsWall(Model m, const std::vector<int>& seed
     EXPECT_GE(length, 0.7 * predicted);
     EXPECT_GE(perSegment, 0.9 * predicted);
     EXPECT_LE(perSegment, 1.05);
+  }
+}
+
+// The bark is cleared at the rings the scene's meshes sweep: a finer mesh than the default
+// (7 samples per segment, rings at sevenths rather than thirds) stays outside too.
+TEST(WindOnAWall, FinerMeshesStayOutside) {
+  for (Model m : {Model::Particles, Model::LSystem}) {
+    SCOPED_TRACE(name(m));
+    const WallRun r = growOnWall(m, 8, "into", 1, 7);
+    EXPECT_GT(r.barkVertices, 10000u);
+    EXPECT_EQ(r.barkInside, 0u) << "of " << r.barkVertices << " bark vertices";
+    EXPECT_EQ(r.crossings, 0u) << "segments through the wall";
   }
 }
 

@@ -38,7 +38,7 @@ Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, si
     float need = 0.0f;
     for (size_t k = 0; k < count; ++k) need = std::max(need, rings[k].radius * rings[k].dir.cross(n).norm());
     if (need <= 0.0f) break;
-    need = 1.01f * need + margin;
+    need = barkClearance(need, margin);
     if (d >= need) break;
     push += (need - d) * n;
   }
@@ -133,7 +133,7 @@ size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, cons
 
 }  // namespace
 
-size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float margin) {
+size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int subdivisions, float margin) {
   const size_t n = p.nodeCount();
   if (n == 0 || env.obstacleCount() == 0) return 0;
   // Points: every node's tip, and the start of every node that does not begin at its parent's
@@ -175,16 +175,28 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
   std::vector<uint8_t> planted(m, 0);
   for (size_t i = 0; i < n; ++i)
     if (p.parent[i] < 0) planted[startPoint[i]] = 1;
+  // The mesh sweeps its rings round the starts of nodes and the tips that end a chain; a tip
+  // across a gap from the next node's start (particle plants) is not on the bark, and moves
+  // only with its node.
+  std::vector<uint8_t> swept(m, 0);
+  for (size_t i = 0; i < n; ++i) {
+    swept[startPoint[i]] = 1;
+    if (next[i] < 0) swept[tipPoint[i]] = 1;
+  }
   std::vector<Vec3> move(m, Vec3::Zero());
   parallelFor(size_t(0), m, [&](size_t k) {
-    if (planted[k]) return;
+    if (planted[k] || !swept[k]) return;
     move[k] = clearance(env, point[k], rings.data() + ringStart[k], ringStart[k + 1] - ringStart[k], margin);
   }, 256);
   // Between its points the bark follows a spline (mesh/branch_sweep.h: centripetal
   // Catmull-Rom through the starts of a chain's nodes and its last tip) that can bow toward a
-  // surface where the chain bends: the spline is cleared too, at a third, half and two thirds
-  // of each span (the rings of the default mesh and the middle), by moving both ends of the
-  // span. The pushes are found in parallel and added in node order.
+  // surface where the chain bends: the spline is cleared too, at the rings the mesh sweeps
+  // there (k / subdivisions; the middle for a polyline, whose straight tube can still graze a
+  // convex edge), by moving both ends of the span. The pushes are found in parallel and added
+  // in node order.
+  std::vector<float> ringAt;
+  for (int k = 1; k < subdivisions; ++k) ringAt.push_back(float(k) / float(subdivisions));
+  if (ringAt.empty()) ringAt.push_back(0.5f);
   auto at = [&](uint32_t k) { return Vec3(point[k] + move[k]); };
   std::vector<uint32_t> spanEnd(n);  // the point the bark's span from node i's start ends at
   for (size_t i = 0; i < n; ++i) spanEnd[i] = next[i] >= 0 ? startPoint[size_t(next[i])] : tipPoint[i];
@@ -211,7 +223,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
       const Vec3 after = c >= 0 ? at(spanEnd[size_t(c)]) : Vec3(2.0f * b - a);
       const CurveSegment curve = centripetalCatmullRom(before, a, b, after);
       const float r = c >= 0 ? std::max(p.radius[i], p.radius[size_t(c)]) : p.radius[i];
-      for (float s : {1.0f / 3.0f, 0.5f, 2.0f / 3.0f}) {
+      for (float s : ringAt) {
         const Vec3 d = curve.derivative(s);
         const float dn = d.norm();
         const Ring ring{r, dn > 1e-6f * len ? Vec3(d / dn) : Vec3(chord / len)};
@@ -277,6 +289,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, float
   for (size_t k = 0; k < m; ++k) moved += move[k] != Vec3::Zero();
   if (moved == 0) return keepLeavesOutside(p, env, {});
   for (size_t i = 0; i < n; ++i) {
+    if (move[startPoint[i]] == Vec3::Zero() && move[tipPoint[i]] == Vec3::Zero()) continue;  // as the model left it
     const Vec3 a = at(startPoint[i]), b = at(tipPoint[i]);
     p.position[i] = a;
     const Vec3 ab = b - a;

@@ -19,6 +19,14 @@ namespace tendril::models {
 // surface within the blade's reach, is laid parallel to the surface nearest its attachment
 // (upper side away from it), shrunk to 0.7 or 0.45 of its size if that is not enough, or
 // dropped. Returns the number of points moved plus the number of leaves changed or dropped.
-size_t keepStemsOutside(plant::PlantModel& plant, const env::Environment& env, float margin = 1e-4f);
+// How far a bark ring of this radius keeps its centre off a surface it lies along: the radius,
+// 1 % of it and `margin`. keepStemsOutside moves points nearer than this; a model that keeps
+// its stems there itself (particle plants collide at it) leaves the pass nothing to do.
+inline float barkClearance(float radius, float margin = 1e-4f) { return 1.01f * radius + margin; }
+
+// The bark between a node's points is cleared at the rings a mesh of `subdivisions` spline
+// samples per segment sweeps there (mesh::MeshOptions, the scene's output settings).
+size_t keepStemsOutside(plant::PlantModel& plant, const env::Environment& env, int subdivisions = 3,
+                        float margin = 1e-4f);
 
 }  // namespace tendril::models

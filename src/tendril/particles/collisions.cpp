@@ -1,6 +1,7 @@
 // Collision response of seed 000 §5.2: obstacles through their signed distance fields, other
 // particles (of any plant, including the same one) through a spatial hash.
 #include "tendril/core/parallel.h"
+#include "tendril/models/stand_off.h"
 #include "tendril/particles/world.h"
 
 #include <algorithm>
@@ -70,7 +71,7 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
   // over obstacles it stays so): a point δ from a sampled one lies at least d − √3 δ from any
   // obstacle. A particle whose three samples cannot reach its radius this way would get no push
   // from sampling, so it is not sampled; the margin covers rounding.
-  constexpr float kLipschitz = 1.7321f, kMargin = 1e-4f;
+  constexpr float kLipschitz = 1.7321f, kMargin = 1e-4f, kContactSlack = 1e-5f;
   constexpr float kUnknown = -std::numeric_limits<float>::infinity();
 
   // The particle is a capsule along its long axis: test its centre and both ends against the
@@ -82,11 +83,15 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
     // steps, where no distance sample sees it: their path is cast as a ray first.
     const Vec3 move = xp_[i] - x_[i];
     const float moved = move.norm();
+    // The capsule keeps its bark's clearance (models::barkClearance, and a little more for
+    // rounding) off obstacles, so the bark the mesh sweeps round it stays outside them without
+    // the stand-off pass moving it.
+    const float contact = models::barkClearance(b_[i]) + kContactSlack;
     if (moved > b_[i] && std::isfinite(moved)) {
-      if (auto hit = env.rayCast(x_[i], move / moved, moved + b_[i])) {
+      if (auto hit = env.rayCast(x_[i], move / moved, moved + contact)) {
         Vec3 n = hit->normal;
         if (n.dot(move) > 0.0f) n = -n;
-        const Vec3 stop = hit->point + n * b_[i];
+        const Vec3 stop = hit->point + n * contact;
         correction_[i] = stop - xp_[i];
         xp_[i] = stop;
       }
@@ -95,8 +100,8 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
     Clearance& clear = clearance_[i];
     const float movedCentre = (xp_[i] - clear.centre).norm();
     const float movedEnds = movedCentre + (axis - clear.axis).norm();
-    if (clear.centreDistance - kLipschitz * movedCentre > a_[i] + b_[i] + kMargin ||
-        clear.distance - kLipschitz * movedEnds > b_[i] + kMargin)
+    if (clear.centreDistance - kLipschitz * movedCentre > a_[i] + contact + kMargin ||
+        clear.distance - kLipschitz * movedEnds > contact + kMargin)
       return;
     const Vec3 samples[3] = {xp_[i], xp_[i] + axis, xp_[i] - axis};
     Vec3 push = Vec3::Zero();
@@ -107,13 +112,13 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
       if (k == 0) {
         centre = nearest = d;
         // A centre farther than the half-length plus the radius: the ends are clear as well.
-        if (d > a_[i] + b_[i]) {
+        if (d > a_[i] + contact) {
           nearest = d - kLipschitz * a_[i];  // what the ends are known to keep
           break;
         }
       }
       nearest = std::min(nearest, d);
-      const float depth = b_[i] - d;
+      const float depth = contact - d;
       if (depth > 0.0f && g.squaredNorm() > 0.0f) push += g * depth;
     }
     if (push.squaredNorm() > 0.0f) {
@@ -199,15 +204,19 @@ void ParticleWorld::collideParticles() {
     if (!(flags_[i] & kActive) || (flags_[i] & (kRoot | kLeaf | kAnchored))) return;
     const Vec3 axisI = qp_[i] * Vec3(0, a_[i], 0);
     const Vec3 ai = xp_[i] - axisI, bi = xp_[i] + axisI;
-    const Eigen::Vector3i c = cellOf(xp_[i]);
-    // The 27 neighbouring cells; a bucket may also hold other cells' particles (hash
-    // collisions), which the cell test skips, so no particle is seen twice.
+    // The cells a particle touching this one can have its centre in: within this one's reach
+    // plus the longest, at most the 27 neighbouring cells and, for all but the longest
+    // particles, 8 to 12 of them (in the same order, so the pushes add up the same). A bucket
+    // may also hold other cells' particles (hash collisions), which the cell test skips, so no
+    // particle is seen twice.
     Vec3 push = Vec3::Zero();
     const float reachI = a_[i] + b_[i];
-    for (int dz = -1; dz <= 1; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
-        for (int dx = -1; dx <= 1; ++dx) {
-          const Eigen::Vector3i cell = c + Eigen::Vector3i(dx, dy, dz);
+    const Vec3 r = Vec3::Constant(1.001f * (reachI + maxReach));  // rounding kept on the safe side
+    const Eigen::Vector3i lo = cellOf(xp_[i] - r), hi = cellOf(xp_[i] + r);
+    for (int z = lo.z(); z <= hi.z(); ++z)
+      for (int y = lo.y(); y <= hi.y(); ++y)
+        for (int x = lo.x(); x <= hi.x(); ++x) {
+          const Eigen::Vector3i cell(x, y, z);
           const uint32_t h = spatialHash(cell, mask);
           for (uint32_t e = start[h]; e < start[h + 1]; ++e) {
             const HashPacked& q = packed[e];

@@ -134,6 +134,7 @@ struct ParticleWorld::ApexUpdate {
   bool dormant = false;  // crowded: the apex stops growing
   Vec3 anchorPoint = Vec3::Zero();
   Vec3 leafUp = Vec3::Zero();  // preferred leaf normal here (away from the surface / to the light)
+  bool leafOnSupport = false;  // leafUp is a support's normal: blades lie on it
 };
 
 void ParticleWorld::grow(const env::Environment& env) {
@@ -204,6 +205,7 @@ void ParticleWorld::decideApex(uint32_t i, const env::Environment& env, ApexUpda
     const Vec3 along2 = toLight - toLight.dot(sp->away) * sp->away;
     if (along2.squaredNorm() > 1e-8f) lightPull = along2.normalized();
     u.leafUp = sp->away;
+    u.leafOnSupport = true;
     if (sp->distance <= touch) {
       u.anchor = true;
       u.anchorPoint = sp->point + sp->away * b_[i];
@@ -356,7 +358,14 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
     // side up the stem; then it turns toward the preferred normal.
     Quat local = axisAngle(Vec3::UnitY(), around) * axisAngle(Vec3::UnitX(), radians(80.0f));
     Quat world = q_[i] * local;
-    if (u.leafUp.squaredNorm() > 0.0f) {
+    if (u.leafOnSupport) {
+      // Near a support the blade lies on it, upper side away, as clinging ivy holds its
+      // leaves (and as the stand-off pass, models/stand_off.h, lays any blade that enters it).
+      Vec3 along = world * Vec3::UnitY();
+      along -= u.leafUp * u.leafUp.dot(along);
+      if (along.squaredNorm() < 1e-8f) along = anyPerpendicular(u.leafUp);
+      world = frameFromYZ(along.normalized(), u.leafUp);
+    } else if (u.leafUp.squaredNorm() > 0.0f) {
       const Vec3 normal = world * Vec3::UnitZ();
       world = turnToward(normal, u.leafUp, s.leafLightTurn * angleBetween(normal, u.leafUp)) * world;
     }

@@ -181,7 +181,9 @@ std::vector<plant::PlantModel> Session::plants() const {
   out.reserve(plants_.size());
   for (const PlantRef& r : plants_) out.push_back(std::move(bySystem[r.system].at(r.index)));
   // Every model's stems, thickened since they were placed, clear of their supports.
-  parallelFor(size_t(0), out.size(), [&](size_t i) { models::keepStemsOutside(out[i], *env_); }, 1);
+  // Their bark is cleared at the rings the scene's meshes sweep.
+  const int subdivisions = scene_.output.subdivisions;
+  parallelFor(size_t(0), out.size(), [&](size_t i) { models::keepStemsOutside(out[i], *env_, subdivisions); }, 1);
   return out;
 }
 
