@@ -89,12 +89,14 @@ void BM_GrowAndSway(benchmark::State& state) {
   }
   const double setupSeconds = setup.seconds();
   const size_t before = world->particleCount();
-  std::vector<double> total, stepMs, snapshotMs, swayMs;
+  std::vector<double> total, stepMs, snapshotMs, swayMs, growthMs, dynamicsMs, collisionsMs;
   size_t segments = 0;
   for (auto _ : state) {
     Timer timer;
     s->step();
     const double step = timer.seconds();
+    const particles::StepTimings& parts = world->timings();
+    growthMs.push_back(parts.growth), dynamicsMs.push_back(parts.dynamics), collisionsMs.push_back(parts.collisions);
     std::vector<plant::PlantModel> plants = s->plants();
     const double snapshot = timer.seconds() - step;
     sway.pose(*s, plants, t, dt);
@@ -120,6 +122,11 @@ void BM_GrowAndSway(benchmark::State& state) {
   state.counters["step_ms"] = medianMs(stepMs);
   state.counters["snapshot_ms"] = medianMs(snapshotMs);
   state.counters["sway_ms"] = medianMs(swayMs);
+  // The step's parts (ParticleWorld::timings): growth, dynamics (prediction, anchors, shape
+  // matching), collisions (obstacles, plants).
+  state.counters["growth_ms"] = medianMs(growthMs);
+  state.counters["dynamics_ms"] = medianMs(dynamicsMs);
+  state.counters["collisions_ms"] = medianMs(collisionsMs);
   state.counters["setup_s"] = setupSeconds;
 }
 BENCHMARK(BM_GrowAndSway)

@@ -280,6 +280,25 @@ uint32_t Environment::addObstacle(ObstacleDef def) {
   o->info.closed = closed;
   o->info.triangles = o->welded.indices.size() / 3;
   for (const Vec3& p : o->welded.positions) o->info.localBounds.extend(p);
+  if (closed && o->info.triangles <= kConvexCheckTriangles) {
+    // Every vertex on or behind every face's plane (rounding allowed for, relative to size).
+    const std::vector<Vec3>& v = o->welded.positions;
+    const std::vector<uint32_t>& idx = o->welded.indices;
+    const float tolerance = 1e-5f * std::max(o->info.localBounds.size().maxCoeff(), 1e-6f);
+    bool convex = true;
+    for (size_t t = 0; convex && t + 2 < idx.size(); t += 3) {
+      const Vec3& a = v[idx[t]];
+      const Vec3 n = (v[idx[t + 1]] - a).cross(v[idx[t + 2]] - a);
+      const float len = n.norm();
+      if (!(len > 0.0f)) continue;
+      for (const Vec3& p : v)
+        if (n.dot(p - a) > tolerance * len) {
+          convex = false;
+          break;
+        }
+    }
+    o->info.convex = convex;
+  }
   o->sdfCell = def.sdfCell;
   o->updateWorld();
   obstacles_.push_back(std::move(o));

@@ -44,10 +44,17 @@ struct ObstacleInfo {
   RigidTransform worldFromLocal;
   Vec3 color;
   bool closed = false;       // watertight, manifold, consistently wound: distances are signed
+  // Closed and convex (every vertex on or behind every face's plane; checked for meshes of up
+  // to kConvexCheckTriangles triangles, others count as not convex). The plane through a
+  // convex obstacle's closest point to an outside point, facing that point, has the whole
+  // obstacle behind it: distances to it are at least the distances to that plane.
+  bool convex = false;
   size_t triangles = 0;
   Bounds3 localBounds;
   Bounds3 worldBounds;
 };
+
+inline constexpr size_t kConvexCheckTriangles = 2048;
 
 struct RayHit {
   float t = 0.0f;

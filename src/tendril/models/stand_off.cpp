@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace tendril::models {
 namespace {
@@ -17,8 +18,15 @@ struct Ring {
 // The push that clears point p of the surfaces near it for bark rings of these radii about
 // these directions. `deeper`: how far p may lie inside a surface (a point on a spline that
 // bows through it) beyond the rings' reach.
+// A plane with a convex obstacle wholly behind it (env::ObstacleInfo::convex): the distance
+// from any point to the obstacle is at least its distance to the plane.
+struct SupportPlane {
+  uint32_t obstacle = UINT32_MAX;  // none
+  Vec3 point = Vec3::Zero(), normal = Vec3::Zero();
+};
+
 Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, size_t count, float margin,
-               float deeper = 0.0f) {
+               float deeper = 0.0f, SupportPlane* plane = nullptr) {
   float reach = 0.0f;
   for (size_t k = 0; k < count; ++k) reach = std::max(reach, rings[k].radius);
   reach = 1.01f * reach + margin;
@@ -28,11 +36,17 @@ Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, si
   // Two passes: a point pushed off one surface (a wall) may come near another (the ground).
   for (int pass = 0; pass < 2; ++pass) {
     const Vec3 q = p + push;
-    const std::optional<env::SurfacePoint> s = env.closestPoint(q, reach);
+    // Asked a little farther than the rings reach when a plane is wanted: stems rest just
+    // beyond it (particle plants collide at barkClearance), and a surface found there needs
+    // no push all the same.
+    const std::optional<env::SurfacePoint> s = env.closestPoint(q, plane && pass == 0 ? 2.0f * reach : reach);
     if (!s) break;
     // Outside a face the direction to the query is the face's normal; only near an edge or
     // inside does it take the exact sign (angle-weighted pseudonormal).
     const bool inside = s->away.dot(s->normal) < 0.5f && env.exactSignedDistance(q, reach) < 0.0f;
+    // The plane through the closest point of a convex obstacle, facing a point outside it.
+    if (plane && pass == 0 && !inside && s->distance > 0.0f && env.obstacle(s->obstacle).convex)
+      *plane = {s->obstacle, s->point, s->away};
     const Vec3 n = inside ? s->normal : s->away;
     const float d = inside ? -s->distance : s->distance;
     float need = 0.0f;
@@ -43,6 +57,35 @@ Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, si
     push += (need - d) * n;
   }
   return push;
+}
+
+// Whether points lie `need` or more from every obstacle, shown without asking for closest
+// points: a point's distance to a convex obstacle is at least its distance to a plane the
+// obstacle lies behind (`planes`: those known near the points), and to any other obstacle at
+// least its distance to the obstacle's box. The hull of a curve's Bézier control points being
+// clear, the curve is; segments between clear points are, of convex obstacles and boxes alike.
+// Scenes of many obstacles are not tried (false: ask).
+bool provenClear(const env::Environment& env, const Vec3* pts, size_t count, std::initializer_list<const SupportPlane*> planes,
+                 float need) {
+  const size_t obstacles = env.obstacleCount();
+  if (obstacles > 8) return false;
+  Bounds3 hull;
+  for (size_t j = 0; j < count; ++j) hull.extend(pts[j]);
+  for (uint32_t o = 0; o < obstacles; ++o) {
+    float bound = 0.0f;
+    for (const SupportPlane* plane : planes) {
+      if (plane->obstacle != o) continue;
+      float least = std::numeric_limits<float>::infinity();
+      for (size_t j = 0; j < count; ++j) least = std::min(least, plane->normal.dot(pts[j] - plane->point));
+      bound = std::max(bound, least);
+    }
+    const Bounds3& box = env.obstacle(o).worldBounds;
+    const Vec3 gap = (box.min - hull.max).cwiseMax(hull.min - box.max).cwiseMax(Vec3::Zero());
+    bound = std::max(bound, gap.norm());
+    // A little to spare for rounding: where a query would find the bark just clear, it asks.
+    if (!(bound >= 1.0001f * need + 1e-5f)) return false;
+  }
+  return true;
 }
 
 // The corners of leaf blade j for a world rotation, size and petiole (as the leaf mesh draws
@@ -74,7 +117,9 @@ bool bladeBlocked(const env::Environment& env, const Vec3& attach, const Vec3 c[
 // or, failing that, are dropped. Returns the number of leaves changed or dropped.
 // Only the leaves of nodes that moved (`movedNode`, empty: none) are checked for facing a
 // surface: a leaf the model placed keeps the side it was grown with.
-size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, const std::vector<uint8_t>& movedNode) {
+// `planeOf`: per node, a plane near its start that an obstacle lies behind (or none).
+size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, const std::vector<uint8_t>& movedNode,
+                         const std::vector<SupportPlane>& planeOf) {
   const size_t count = p.leafCount();
   std::vector<uint8_t> keep(count, 1), changed(count, 0);
   std::vector<Quat> rotation(count);
@@ -94,7 +139,13 @@ size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, cons
       s = env.closestPoint(attach, reach);
       facing = s && (world * Vec3::UnitZ()).dot(s->away) < 0.0f;
     }
-    if (!facing && !bladeBlocked(env, attach, c)) return;
+    if (!facing) {
+      // An outline shown clear of every obstacle crosses none.
+      const Vec3 outline[5] = {attach, c[0], c[1], c[2], c[3]};
+      const size_t node = size_t(p.leafNode[j]);
+      if (node < planeOf.size() && provenClear(env, outline, 5, {&planeOf[node]}, 0.0f)) return;
+      if (!bladeBlocked(env, attach, c)) return;
+    }
     if (!s) s = env.closestPoint(attach, reach);
     changed[j] = 1;
     Quat laid = world;
@@ -184,10 +235,13 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
     if (next[i] < 0) swept[tipPoint[i]] = 1;
   }
   std::vector<Vec3> move(m, Vec3::Zero());
+  std::vector<SupportPlane> plane(m);
   parallelFor(size_t(0), m, [&](size_t k) {
     if (planted[k] || !swept[k]) return;
-    move[k] = clearance(env, point[k], rings.data() + ringStart[k], ringStart[k + 1] - ringStart[k], margin);
+    move[k] = clearance(env, point[k], rings.data() + ringStart[k], ringStart[k + 1] - ringStart[k], margin, 0.0f,
+                        &plane[k]);
   }, 256);
+
   // Between its points the bark follows a spline (mesh/branch_sweep.h: centripetal
   // Catmull-Rom through the starts of a chain's nodes and its last tip) that can bow toward a
   // surface where the chain bends: the spline is cleared too, at the rings the mesh sweeps
@@ -223,13 +277,17 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
       const Vec3 after = c >= 0 ? at(spanEnd[size_t(c)]) : Vec3(2.0f * b - a);
       const CurveSegment curve = centripetalCatmullRom(before, a, b, after);
       const float r = c >= 0 ? std::max(p.radius[i], p.radius[size_t(c)]) : p.radius[i];
+      const float need = barkClearance(r, margin);
+      const Vec3 control[4] = {curve.p1, curve.p1 + curve.m1 / 3.0f, curve.p2 - curve.m2 / 3.0f, curve.p2};
+      if (provenClear(env, control, 4, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) return;
       for (float s : ringAt) {
+        const Vec3 onCurve = curve.point(s);
+        if (provenClear(env, &onCurve, 1, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) continue;
         const Vec3 d = curve.derivative(s);
         const float dn = d.norm();
         const Ring ring{r, dn > 1e-6f * len ? Vec3(d / dn) : Vec3(chord / len)};
         // The span's ends are clear, so a surface the curve bows through lies no further from
         // the curve point than the chord does.
-        const Vec3 onCurve = curve.point(s);
         const float bow = (onCurve - (a + s * chord)).norm();
         Vec3 push = clearance(env, onCurve, &ring, 1, margin, bow);
         if (push == Vec3::Zero()) continue;
@@ -287,7 +345,9 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
   const std::vector<Quat> oldOrientation = p.orientation;
   size_t moved = 0;
   for (size_t k = 0; k < m; ++k) moved += move[k] != Vec3::Zero();
-  if (moved == 0) return keepLeavesOutside(p, env, {});
+  std::vector<SupportPlane> planeOfNode(n);
+  for (size_t i = 0; i < n; ++i) planeOfNode[i] = plane[startPoint[i]];
+  if (moved == 0) return keepLeavesOutside(p, env, {}, planeOfNode);
   for (size_t i = 0; i < n; ++i) {
     if (move[startPoint[i]] == Vec3::Zero() && move[tipPoint[i]] == Vec3::Zero()) continue;  // as the model left it
     const Vec3 a = at(startPoint[i]), b = at(tipPoint[i]);
@@ -313,7 +373,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
   }
   std::vector<uint8_t> movedNode(n);
   for (size_t i = 0; i < n; ++i) movedNode[i] = move[startPoint[i]] != Vec3::Zero() || move[tipPoint[i]] != Vec3::Zero();
-  return moved + keepLeavesOutside(p, env, movedNode);
+  return moved + keepLeavesOutside(p, env, movedNode, planeOfNode);
 }
 
 }  // namespace tendril::models
