@@ -12,6 +12,8 @@
 #include "tendril/render/plant_instances.h"
 #include "tendril/session/session.h"
 
+#include "process_cpu.h"
+
 #include <benchmark/benchmark.h>
 
 // Under `valgrind --tool=callgrind --instr-atstart=no --collect-atstart=no`, only the timed
@@ -34,13 +36,7 @@
 namespace tendril {
 namespace {
 
-// CPU time of the whole process, every thread (s): on a machine shared with other builds it
-// says what a frame costs better than the wall clock does.
-double processCpuSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
+using bench::processCpuSeconds;
 
 struct Grown {
   std::unique_ptr<session::Session> session;

@@ -9,8 +9,9 @@
 #include "tendril/particles/particle_model.h"
 #include "tendril/wind/sph.h"
 
+#include "process_cpu.h"
+
 #include <benchmark/benchmark.h>
-#include <sys/resource.h>
 
 // Under `valgrind --tool=callgrind --instr-atstart=no --collect-atstart=no`, only the timed
 // frames' SphAir::step are counted (the setup runs uninstrumented); no-ops otherwise.
@@ -141,12 +142,7 @@ Scene& scene(size_t airTarget, size_t plantTarget, wind::SphSolver solver) {
   return s;
 }
 
-// CPU seconds of the whole process (every thread) so far.
-double processCpuSeconds() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
+using bench::processCpuSeconds;
 
 // Timed frames: 40, or TENDRIL_SPH_BENCH_FRAMES (a few, for callgrind).
 int frames() {

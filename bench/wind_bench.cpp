@@ -11,6 +11,8 @@
 #include "support/particle_session.h"
 #include "support/synthetic_plants.h"
 
+#include "process_cpu.h"
+
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -89,9 +91,10 @@ void BM_GrowAndSway(benchmark::State& state) {
   }
   const double setupSeconds = setup.seconds();
   const size_t before = world->particleCount();
-  std::vector<double> total, stepMs, snapshotMs, swayMs, growthMs, dynamicsMs, collisionsMs;
+  std::vector<double> total, stepMs, snapshotMs, swayMs, growthMs, dynamicsMs, collisionsMs, cpuMs;
   size_t segments = 0;
   for (auto _ : state) {
+    const double cpu0 = bench::processCpuSeconds();
     Timer timer;
     s->step();
     const double step = timer.seconds();
@@ -102,6 +105,7 @@ void BM_GrowAndSway(benchmark::State& state) {
     sway.pose(*s, plants, t, dt);
     t += dt;
     const double seconds = timer.seconds();
+    cpuMs.push_back(bench::processCpuSeconds() - cpu0);
     benchmark::DoNotOptimize(plants.data());
     state.SetIterationTime(seconds);
     total.push_back(seconds);
@@ -122,6 +126,7 @@ void BM_GrowAndSway(benchmark::State& state) {
   state.counters["step_ms"] = medianMs(stepMs);
   state.counters["snapshot_ms"] = medianMs(snapshotMs);
   state.counters["sway_ms"] = medianMs(swayMs);
+  state.counters["cpu_ms"] = medianMs(cpuMs);  // every thread's CPU time per frame
   // The step's parts (ParticleWorld::timings): growth, dynamics (prediction, anchors, shape
   // matching), collisions (obstacles, plants).
   state.counters["growth_ms"] = medianMs(growthMs);

@@ -71,7 +71,12 @@ bool provenClear(const env::Environment& env, const Vec3* pts, size_t count, std
   if (obstacles > 8) return false;
   Bounds3 hull;
   for (size_t j = 0; j < count; ++j) hull.extend(pts[j]);
+  // A little to spare for rounding: where a query would find the bark just clear, it asks.
+  const float wanted = 1.0001f * need + 1e-5f;
   for (uint32_t o = 0; o < obstacles; ++o) {
+    const Bounds3& box = env.obstacle(o).worldBounds;
+    const Vec3 gap = (box.min - hull.max).cwiseMax(hull.min - box.max).cwiseMax(Vec3::Zero());
+    if (gap.squaredNorm() >= wanted * wanted) continue;
     float bound = 0.0f;
     for (const SupportPlane* plane : planes) {
       if (plane->obstacle != o) continue;
@@ -79,11 +84,7 @@ bool provenClear(const env::Environment& env, const Vec3* pts, size_t count, std
       for (size_t j = 0; j < count; ++j) least = std::min(least, plane->normal.dot(pts[j] - plane->point));
       bound = std::max(bound, least);
     }
-    const Bounds3& box = env.obstacle(o).worldBounds;
-    const Vec3 gap = (box.min - hull.max).cwiseMax(hull.min - box.max).cwiseMax(Vec3::Zero());
-    bound = std::max(bound, gap.norm());
-    // A little to spare for rounding: where a query would find the bark just clear, it asks.
-    if (!(bound >= 1.0001f * need + 1e-5f)) return false;
+    if (!(bound >= wanted)) return false;
   }
   return true;
 }
