@@ -242,6 +242,10 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
     move[k] = clearance(env, point[k], rings.data() + ringStart[k], ringStart[k + 1] - ringStart[k], margin, 0.0f,
                         &plane[k]);
   }, 256);
+  // A plane bounds the distance to its obstacle anywhere: a tip off the bark borrows its
+  // node's.
+  for (size_t i = 0; i < n; ++i)
+    if (!swept[tipPoint[i]]) plane[tipPoint[i]] = plane[startPoint[i]];
 
   // Between its points the bark follows a spline (mesh/branch_sweep.h: centripetal
   // Catmull-Rom through the starts of a chain's nodes and its last tip) that can bow toward a
@@ -320,9 +324,12 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
   // No move may carry a point through a surface or a segment into one (a tight hole, a point
   // pushed off one surface onto another): such points stay where they were, and so, in turn,
   // do the points of segments that would then cross.
+  // (A move shown clear of every obstacle, as above, crosses nothing and ends outside.)
   parallelFor(size_t(0), m, [&](size_t k) {
     if (move[k] == Vec3::Zero()) return;
     const Vec3 to = point[k] + move[k];
+    const Vec3 path[2] = {point[k], to};
+    if (provenClear(env, path, 2, {&plane[k]}, 0.0f)) return;
     if (env.countSegmentHits(point[k], to) > 0 || env.exactSignedDistance(to, 1e-3f) < 0.0f) move[k] = Vec3::Zero();
   }, 256);
   std::vector<uint8_t> crosses(n, 0);
@@ -330,6 +337,11 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
     parallelFor(size_t(0), n, [&](size_t i) {
       const uint32_t a = startPoint[i], b = tipPoint[i];
       if (move[a] == Vec3::Zero() && move[b] == Vec3::Zero()) {
+        crosses[i] = 0;
+        return;
+      }
+      const Vec3 segment[2] = {at(a), at(b)};
+      if (provenClear(env, segment, 2, {&plane[a], &plane[b]}, 0.0f)) {
         crosses[i] = 0;
         return;
       }
