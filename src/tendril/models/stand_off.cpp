@@ -72,7 +72,7 @@ bool provenClear(const env::Environment& env, const Vec3* pts, size_t count, std
   Bounds3 hull;
   for (size_t j = 0; j < count; ++j) hull.extend(pts[j]);
   // A little to spare for rounding: where a query would find the bark just clear, it asks.
-  const float wanted = 1.0001f * need + 1e-5f;
+  const float wanted = need + 5e-6f;
   for (uint32_t o = 0; o < obstacles; ++o) {
     const Bounds3& box = env.obstacle(o).worldBounds;
     const Vec3 gap = (box.min - hull.max).cwiseMax(hull.min - box.max).cwiseMax(Vec3::Zero());
@@ -236,11 +236,36 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
     if (next[i] < 0) swept[tipPoint[i]] = 1;
   }
   std::vector<Vec3> move(m, Vec3::Zero());
+  // Every eighth node along a chain asks for the closest point at its points, and keeps the
+  // plane found there (below); the points of the seven after it are first tried against that
+  // plane and the obstacles' boxes, and ask only if that does not show them clear.
+  std::vector<uint32_t> pointNode(m, UINT32_MAX), depth(n), askedBy(n);
+  for (size_t i = 0; i < n; ++i) {
+    const int32_t q = p.parent[i];
+    depth[i] = q < 0 ? 0 : depth[size_t(q)] + 1;
+    askedBy[i] = q < 0 || depth[i] % 8 == 0 ? uint32_t(i) : askedBy[size_t(q)];
+    if (pointNode[startPoint[i]] == UINT32_MAX) pointNode[startPoint[i]] = uint32_t(i);
+    if (pointNode[tipPoint[i]] == UINT32_MAX) pointNode[tipPoint[i]] = uint32_t(i);
+  }
   std::vector<SupportPlane> plane(m);
-  parallelFor(size_t(0), m, [&](size_t k) {
-    if (planted[k] || !swept[k]) return;
+  auto ask = [&](size_t k) {
     move[k] = clearance(env, point[k], rings.data() + ringStart[k], ringStart[k + 1] - ringStart[k], margin, 0.0f,
                         &plane[k]);
+  };
+  parallelFor(size_t(0), m, [&](size_t k) {
+    if (planted[k] || !swept[k] || askedBy[pointNode[k]] != pointNode[k]) return;
+    ask(k);
+  }, 256);
+  parallelFor(size_t(0), m, [&](size_t k) {
+    if (planted[k] || !swept[k] || askedBy[pointNode[k]] == pointNode[k]) return;
+    const SupportPlane& near = plane[startPoint[askedBy[pointNode[k]]]];
+    float need = 0.0f;
+    for (uint32_t r = ringStart[k]; r < ringStart[k + 1]; ++r) need = std::max(need, barkClearance(rings[r].radius, margin));
+    if (provenClear(env, &point[k], 1, {&near}, need)) {
+      plane[k] = near;
+      return;
+    }
+    ask(k);
   }, 256);
   // A plane bounds the distance to its obstacle anywhere: a tip off the bark borrows its
   // node's.
