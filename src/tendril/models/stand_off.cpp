@@ -15,9 +15,6 @@ struct Ring {
   Vec3 dir;
 };
 
-// The push that clears point p of the surfaces near it for bark rings of these radii about
-// these directions. `deeper`: how far p may lie inside a surface (a point on a spline that
-// bows through it) beyond the rings' reach.
 // A plane with a convex obstacle wholly behind it (env::ObstacleInfo::convex): the distance
 // from any point to the obstacle is at least its distance to the plane.
 struct SupportPlane {
@@ -25,6 +22,10 @@ struct SupportPlane {
   Vec3 point = Vec3::Zero(), normal = Vec3::Zero();
 };
 
+// The push that clears point p of the surfaces near it for bark rings of these radii about
+// these directions. `deeper`: how far p may lie inside a surface (a point on a spline that
+// bows through it) beyond the rings' reach. `plane`, if given, receives the plane through the
+// closest point of a convex obstacle p is outside of.
 Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, size_t count, float margin,
                float deeper = 0.0f, SupportPlane* plane = nullptr) {
   float reach = 0.0f;
