@@ -279,9 +279,13 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
   // there (k / subdivisions; the middle for a polyline, whose straight tube can still graze a
   // convex edge), by moving both ends of the span. The pushes are found in parallel and added
   // in node order.
-  std::vector<float> ringAt;
+  // The rings at the span's ends are checked again here: the mesh turns them to the spline's
+  // tangent, which moves with the neighbouring points (the point check above used the nodes'
+  // own directions before anything moved).
+  std::vector<float> ringAt = {0.0f};
   for (int k = 1; k < subdivisions; ++k) ringAt.push_back(float(k) / float(subdivisions));
-  if (ringAt.empty()) ringAt.push_back(0.5f);
+  if (subdivisions <= 1) ringAt.push_back(0.5f);
+  ringAt.push_back(1.0f);
   auto at = [&](uint32_t k) { return Vec3(point[k] + move[k]); };
   std::vector<uint32_t> spanEnd(n);  // the point the bark's span from node i's start ends at
   for (size_t i = 0; i < n; ++i) spanEnd[i] = next[i] >= 0 ? startPoint[size_t(next[i])] : tipPoint[i];
@@ -312,6 +316,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
       const Vec3 control[4] = {curve.p1, curve.p1 + curve.m1 / 3.0f, curve.p2 - curve.m2 / 3.0f, curve.p2};
       if (provenClear(env, control, 4, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) return;
       for (float s : ringAt) {
+        if (s == 0.0f && planted[startPoint[i]]) continue;  // a planted base stays as it stands
         const Vec3 onCurve = curve.point(s);
         if (provenClear(env, &onCurve, 1, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) continue;
         const Vec3 d = curve.derivative(s);
