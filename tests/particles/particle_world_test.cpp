@@ -166,7 +166,7 @@ TEST(ParticleGrowth, StemsKeepTheirBarkOffTheWallAndLeavesLieOnIt) {
     if (!onFace(attach) || !(m.leafSize[j] > 0.0f)) continue;
     ++blades;
     const Quat r = m.leafWorldRotation(j);
-    const float hw = 0.5f * m.leafSize[j] * (m.leafShapes.empty() ? 1.0f : m.leafShapes[m.leafShape[j]].aspect);
+    const float hw = 0.5f * m.leafSize[j] * m.leafAspect(j);
     bool behind = false;
     for (const Vec3& c : {Vec3(-hw, m.leafPetiole[j], 0), Vec3(hw, m.leafPetiole[j], 0),
                           Vec3(hw, m.leafPetiole[j] + m.leafSize[j], 0), Vec3(-hw, m.leafPetiole[j] + m.leafSize[j], 0)})

@@ -8,7 +8,7 @@ namespace tendril::test {
 void leafCorners(const plant::PlantModel& p, size_t i, Vec3 out[4]) {
   Vec3 a = p.leafWorldPosition(i);
   Mat3 r = p.leafWorldRotation(i).toRotationMatrix();
-  float aspect = p.leafShapes.empty() ? 1.0f : p.leafShapes[p.leafShape[i]].aspect;
+  float aspect = p.leafAspect(i);
   float hw = 0.5f * p.leafSize[i] * aspect, pet = p.leafPetiole[i], len = p.leafSize[i];
   out[0] = a + r * Vec3(-hw, pet, 0);
   out[1] = a + r * Vec3(hw, pet, 0);

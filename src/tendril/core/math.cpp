@@ -32,6 +32,13 @@ Quat axisAngle(const Vec3& axis, float angle) {
   return Quat(Eigen::AngleAxisf(angle, axis / n));
 }
 
+Quat laidOn(const Quat& blade, const Vec3& up) {
+  Vec3 along = blade * Vec3::UnitY();
+  along -= up * up.dot(along);
+  if (along.squaredNorm() < 1e-8f) along = anyPerpendicular(up);
+  return frameFromYZ(along.normalized(), up);
+}
+
 Quat frameFromYZ(const Vec3& y, const Vec3& zHint) {
   Vec3 yn = y.normalized();
   Vec3 z = zHint - yn * yn.dot(zHint);

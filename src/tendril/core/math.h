@@ -61,6 +61,10 @@ Quat axisAngle(const Vec3& axis, float angle);
 // (Gram-Schmidt). When zHint is parallel to y, any perpendicular is used.
 Quat frameFromYZ(const Vec3& y, const Vec3& zHint);
 
+// A leaf blade (local +Y along it, +Z its upper side) laid on a surface of unit normal `up`:
+// +Y projected onto the surface (any direction on it if +Y is along `up`), +Z along `up`.
+Quat laidOn(const Quat& blade, const Vec3& up);
+
 // Angle in [0, pi] between two non-zero vectors, robust near 0 and pi (atan2 form).
 float angleBetween(const Vec3& a, const Vec3& b);
 

@@ -79,7 +79,7 @@ void buildLeafQuads(const PlantModel& plant, const MeshOptions& options, std::ve
   std::vector<uint32_t> perShape(shapes, 0);
   for (size_t i = 0; i < leaves; ++i) slot[i] = perShape[plant.leafShape[i]]++;
   std::vector<float> aspect(shapes);
-  for (size_t s = 0; s < shapes; ++s) aspect[s] = leafAspectFor(plant, s);
+  for (size_t s = 0; s < shapes; ++s) aspect[s] = leafShapeFor(plant, s).aspect;
 
   size_t nv = leafVertexCount(options), ni = leafIndexCount(options);
   meshes.resize(shapes);

@@ -30,10 +30,6 @@ size_t leafShapeCount(const plant::PlantModel& plant);
 // The shape id `shape` stands for. Ids without a LeafShape, and shapes without a texture, are
 // drawn with kDefaultLeafTexture (the id's aspect and tint are kept when it has an entry).
 plant::LeafShape leafShapeFor(const plant::PlantModel& plant, size_t shape);
-// Its blade's width / length, without copying the shape (per leaf, in hot loops).
-inline float leafAspectFor(const plant::PlantModel& plant, size_t shape) {
-  return shape < plant.leafShapes.size() ? plant.leafShapes[shape].aspect : plant::LeafShape{}.aspect;
-}
 
 // Vertices and indices of one leaf for `leafSubdivisions` quads.
 inline size_t leafVertexCount(const MeshOptions& o) { return 2 * (static_cast<size_t>(o.leafSubdivisions) + 1); }

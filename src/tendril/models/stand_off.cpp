@@ -94,7 +94,7 @@ bool provenClear(const env::Environment& env, const Vec3* pts, size_t count, std
 // the blade: a quad from the petiole's end, half its aspect-scaled size either side of +Y).
 void bladeCorners(const plant::PlantModel& p, size_t j, const Vec3& attach, const Quat& rotation, float size,
                   float petiole, Vec3 c[4]) {
-  const float aspect = p.leafShapes.empty() ? 1.0f : p.leafShapes[p.leafShape[j]].aspect;
+  const float aspect = p.leafAspect(j);
   const float hw = 0.5f * size * aspect;
   const Mat3 r = rotation.toRotationMatrix();
   c[0] = attach + r * Vec3(-hw, petiole, 0);
@@ -150,13 +150,7 @@ size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, cons
     }
     if (!s) s = env.closestPoint(attach, reach);
     changed[j] = 1;
-    Quat laid = world;
-    if (s) {
-      Vec3 along = world * Vec3::UnitY();
-      along -= s->away * s->away.dot(along);
-      if (along.squaredNorm() < 1e-8f) along = anyPerpendicular(s->away);
-      laid = frameFromYZ(along.normalized(), s->away);
-    }
+    const Quat laid = s ? laidOn(world, s->away) : world;
     for (float k : {1.0f, 0.7f, 0.45f}) {
       bladeCorners(p, j, attach, laid, k * p.leafSize[j], k * p.leafPetiole[j], c);
       if (!bladeBlocked(env, attach, c)) {

@@ -361,10 +361,7 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
     if (u.leafOnSupport) {
       // Near a support the blade lies on it, upper side away, as clinging ivy holds its
       // leaves (and as the stand-off pass, models/stand_off.h, lays any blade that enters it).
-      Vec3 along = world * Vec3::UnitY();
-      along -= u.leafUp * u.leafUp.dot(along);
-      if (along.squaredNorm() < 1e-8f) along = anyPerpendicular(u.leafUp);
-      world = frameFromYZ(along.normalized(), u.leafUp);
+      world = laidOn(world, u.leafUp);
     } else if (u.leafUp.squaredNorm() > 0.0f) {
       const Vec3 normal = world * Vec3::UnitZ();
       world = turnToward(normal, u.leafUp, s.leafLightTurn * angleBetween(normal, u.leafUp)) * world;

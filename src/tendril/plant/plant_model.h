@@ -123,6 +123,11 @@ struct PlantModel {
   Vec3 tip(size_t node) const { return position[node] + length[node] * direction(node); }
   // worldFromLeaf as a rotation and the leaf's attachment point (world).
   Quat leafWorldRotation(size_t leaf) const { return orientation[leafNode[leaf]] * leafRotation[leaf]; }
+  // The blade width / length of leaf `leaf` (its shape's, or the default's for an id without one).
+  float leafAspect(size_t leaf) const {
+    const size_t shape = leafShape[leaf];
+    return shape < leafShapes.size() ? leafShapes[shape].aspect : LeafShape{}.aspect;
+  }
   Vec3 leafWorldPosition(size_t leaf) const {
     return position[leafNode[leaf]] + orientation[leafNode[leaf]] * leafOffset[leaf];
   }

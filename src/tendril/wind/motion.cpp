@@ -149,7 +149,7 @@ WindMotion::WindMotion(const plant::PlantModel& rest, const plant::GrowthFlowSpe
   }
   std::vector<float> leafAreaOfNode(n, 0.0f);
   for (size_t j = 0; j < m; ++j) {
-    float aspect = mesh::leafAspectFor(rest_, rest_.leafShape[j]);
+    float aspect = rest_.leafAspect(j);
     float area = 0.7f * rest_.leafSize[j] * rest_.leafSize[j] * aspect;  // a leaf fills ~70 % of its quad
     int32_t node = rest_.leafNode[j];
     leafAreaOfNode[size_t(node)] += area;
