@@ -53,7 +53,6 @@ int runGrow(const GrowOptions& o) {
   Timer total;
   session::Session session(std::move(scene));
   const scene::Scene& sc = session.scene();
-  const io::ExportOptions options = session::exportOptions(sc.output);
 
   // Meshes the plants (and obstacles, if asked) once for both writers; `stem` names the files.
   std::vector<std::string> written;
@@ -85,15 +84,8 @@ int runGrow(const GrowOptions& o) {
   // A looping clip of the grown plants moving in the scene's wind (Growth-Flow motion).
   float clipSeconds = o.windAnimation >= 0.0 ? float(o.windAnimation) : sc.output.animationSeconds;
   if (clipSeconds > 0.0f) {
-    std::vector<plant::GrowthFlowSpecies> species = session.growthFlow();
-    std::vector<wind::AnimatedPlant> animated;
-    for (size_t i = 0; i < exportScene.plants.size(); ++i) animated.push_back({&exportScene.plants[i], species[i]});
-    wind::WindAnimationOptions a;
-    a.seconds = clipSeconds;
-    a.fps = sc.output.animationFps;
-    a.maxJoints = sc.output.animationJoints;
-    a.seed = sc.seed;
-    a.mesh = options.mesh;
+    const std::vector<wind::AnimatedPlant> animated = session::animatedPlants(session, exportScene);
+    const wind::WindAnimationOptions a = session::windClipOptions(session, clipSeconds);
     std::filesystem::path file = outDir / "plant-wind.glb";
     wind::writeWindAnimationGlb(animated, session.environment().windField(), a, file);
     written.push_back(file.string());
@@ -104,15 +96,9 @@ int runGrow(const GrowOptions& o) {
   }
   // A clip of the plants growing (joints scaling in by the age of their nodes) as they move.
   if (o.growthAnimation > 0.0) {
-    std::vector<plant::GrowthFlowSpecies> species = session.growthFlow();
-    std::vector<wind::AnimatedPlant> animated;
-    for (size_t i = 0; i < exportScene.plants.size(); ++i) animated.push_back({&exportScene.plants[i], species[i]});
-    wind::WindAnimationOptions a;
-    a.seconds = float(o.growthAnimation);
-    a.fps = sc.output.animationFps;
+    const std::vector<wind::AnimatedPlant> animated = session::animatedPlants(session, exportScene);
+    wind::WindAnimationOptions a = session::windClipOptions(session, float(o.growthAnimation));
     a.maxJoints = std::max(sc.output.animationJoints, 256);
-    a.seed = sc.seed;
-    a.mesh = options.mesh;
     a.growth = true;
     std::filesystem::path file = outDir / "plant-growth.glb";
     wind::writeWindAnimationGlb(animated, session.environment().windField(), a, file);
@@ -135,7 +121,7 @@ int runGrow(const GrowOptions& o) {
     std::string files;
     for (const auto& w : written) files += (files.empty() ? "" : ", ") + w;
     if (sequenceFiles > 0) files += fmt::format(" and a sequence of {} file(s) in {}", sequenceFiles, outDir.string());
-    log::info("grew {} plant(s) in {} steps: {} segments, {} leaves (growth {:.2f} s, total {:.2f} s); wrote {}",
+    log::info("grew {} plant(s) in {} steps: {} segments, {} leaves (growth {:.3f} s, total {:.3f} s); wrote {}",
               exportScene.plants.size(), session.stepCount(), segments, leaves, growSeconds, total.seconds(), files);
   }
   return 0;

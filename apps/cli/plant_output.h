@@ -1,8 +1,10 @@
-// Writing a session's plants as the CLI commands do (grow, edit): output formats, the output
-// directory and the .glb/.obj files, and a rendered preview picture.
+// Writing a session's plants as the CLI commands do (grow, edit): output formats and the output
+// directory.
 #pragma once
 
 #include "tendril/io/export_scene.h"
+#include "tendril/render/session_render.h"
+#include "tendril/session/plant_export.h"
 #include "tendril/session/session.h"
 
 #include <filesystem>
@@ -17,15 +19,9 @@ std::set<std::string> parseFormats(const std::string& list);
 // Creates the directory if missing; an Error naming -o if it cannot be.
 std::filesystem::path prepareOutputDir(const std::string& dir);
 
-// Meshes the session's plants (and the obstacles, if the scene asks) and writes
-// <outDir>/<stem>.glb and/or .obj. `source` names the input in validation errors. The
-// snapshot written is kept in `written` (for animation export); returns the files written.
-std::vector<std::string> writePlantFiles(const session::Session& session, const std::filesystem::path& outDir,
-                                         const std::string& stem, const std::set<std::string>& formats,
-                                         const std::string& source, io::ExportScene& written);
-
-// Renders the session from the default 3/4 view (headless OpenGL) to a PNG, atomically.
-void writePreview(const session::Session& session, const std::filesystem::path& png, int width = 960,
-                  int height = 540);
+// Shared with the Python module: session::writePlantFiles (session/plant_export.h) and
+// render::writePreview (render/session_render.h).
+using session::writePlantFiles;
+using render::writePreview;
 
 }  // namespace tendril::cli

@@ -72,4 +72,16 @@ void renderScenePng(const session::Session& session, const RenderSettings& setti
   io::writeFileAtomic(png, io::encodePng(image));
 }
 
+void writePreview(const session::Session& session, const std::filesystem::path& png, int width, int height) {
+  io::checkOutputPath(png);
+  SessionScene view(session);
+  RenderSettings settings;
+  settings.width = width;
+  settings.height = height;
+  const Camera camera =
+      frameBounds(focusBounds(view.scene()), kDefaultViewDirection, float(width) / float(height), radians(40.0f));
+  OffscreenRenderer renderer;
+  io::writeFileAtomic(png, io::encodePng(renderer.render(view.scene(), camera, settings)));
+}
+
 }  // namespace tendril::render

@@ -49,4 +49,10 @@ io::Image renderSessionImage(const session::Session& session, const RenderSettin
 void renderScenePng(const session::Session& session, const RenderSettings& settings, const std::filesystem::path& png,
                     const std::optional<Camera>& camera = std::nullopt);
 
+// A preview picture: the session from the default 3/4 view, framed on what grows (40° field of
+// view), written to `png` atomically. What `tendril edit --preview` and the Python module's
+// Session.render write.
+void writePreview(const session::Session& session, const std::filesystem::path& png, int width = 960,
+                  int height = 540);
+
 }  // namespace tendril::render

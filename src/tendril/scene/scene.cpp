@@ -17,6 +17,36 @@ namespace tendril::scene {
 
 namespace {
 
+// A mesh given in the scene itself (what the Python module and the Blender add-on write):
+// "vertices" [x0, y0, z0, x1, ...] and "triangles" [i0, i1, i2, ...], flat arrays.
+TriangleMesh readInlineMesh(JsonObject& o) {
+  constexpr size_t kMaxVertices = size_t(1) << 24, kMaxTriangles = size_t(1) << 25;
+  const Json* v = o.find("vertices");
+  if (!v->is_array() || v->size() % 3 != 0 || v->empty())
+    throw o.error("vertices", "expected a flat array of x, y, z coordinates (a multiple of 3 numbers, at least 3)");
+  if (v->size() / 3 > kMaxVertices)
+    throw o.error("vertices", fmt::format("has {} vertices, more than the {} a mesh may have", v->size() / 3, kMaxVertices));
+  const std::vector<float> xyz = o.numberArray("vertices", -JsonObject::kWorldExtent, JsonObject::kWorldExtent);
+  TriangleMesh mesh;
+  mesh.positions.resize(xyz.size() / 3);
+  for (size_t i = 0; i < mesh.positions.size(); ++i) mesh.positions[i] = Vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
+  const Json* t = o.find("triangles");
+  if (!t) throw o.error("triangles", "is required with \"vertices\" (a flat array of vertex indices, 3 per triangle)");
+  if (!t->is_array() || t->size() % 3 != 0 || t->empty())
+    throw o.error("triangles", "expected a flat array of vertex indices (a multiple of 3, at least 3)");
+  if (t->size() / 3 > kMaxTriangles)
+    throw o.error("triangles", fmt::format("has {} triangles, more than the {} a mesh may have", t->size() / 3, kMaxTriangles));
+  mesh.indices.resize(t->size());
+  for (size_t i = 0; i < t->size(); ++i) {
+    const Json& e = (*t)[i];
+    if (!e.is_number_integer() || e.get<int64_t>() < 0 || uint64_t(e.get<int64_t>()) >= mesh.positions.size())
+      throw Error(o.source(), o.pointerTo("triangles") + "/" + std::to_string(i),
+                  fmt::format("must be a vertex index in [0, {}], got {}", mesh.positions.size() - 1, e.dump()));
+    mesh.indices[i] = uint32_t(e.get<int64_t>());
+  }
+  return mesh;
+}
+
 env::ObstacleDef readObstacle(JsonObject& o, const std::filesystem::path& baseDir, size_t index) {
   env::ObstacleDef d;
   std::string type = o.choice("type", "", {"plane", "box", "sphere", "cylinder", "wall", "mesh"});
@@ -57,11 +87,19 @@ env::ObstacleDef readObstacle(JsonObject& o, const std::filesystem::path& baseDi
     d.mesh = env::makeWall(size, openings);
   } else {
     d.kind = env::ObstacleKind::Mesh;
-    if (!o.has("path")) throw o.error("path", "is required for a mesh obstacle (a mesh file Assimp reads)");
-    std::filesystem::path p = o.string("path", "");
-    if (p.is_relative()) p = baseDir / p;
-    d.source = p.lexically_normal().string();
-    d.mesh = env::loadMeshFile(p.lexically_normal());
+    if (o.has("path") == o.has("vertices"))
+      throw o.error(o.has("path") ? "vertices" : "path",
+                    o.has("path") ? "and \"path\" cannot both be given: a mesh comes from a file or from arrays"
+                                  : "is required for a mesh obstacle (a mesh file Assimp reads), or \"vertices\" "
+                                    "and \"triangles\"");
+    if (o.has("vertices")) {
+      d.mesh = readInlineMesh(o);
+    } else {
+      std::filesystem::path p = o.string("path", "");
+      if (p.is_relative()) p = baseDir / p;
+      d.source = p.lexically_normal().string();
+      d.mesh = env::loadMeshFile(p.lexically_normal());
+    }
     // Scale is baked into the mesh; the obstacle keeps a rigid transform (DESIGN: SDFs move
     // with the obstacle's rigid transform).
     Vec3 scale = Vec3::Ones();

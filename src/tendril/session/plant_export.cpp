@@ -1,5 +1,9 @@
 #include "tendril/session/plant_export.h"
 
+#include "tendril/io/export_model.h"
+#include "tendril/io/gltf_writer.h"
+#include "tendril/io/obj_writer.h"
+
 namespace tendril::session {
 
 io::ExportOptions exportOptions(const scene::OutputSettings& output) {
@@ -23,6 +27,49 @@ io::ExportScene exportScene(const Session& session, const std::string& source) {
     }
   }
   return out;
+}
+
+std::vector<std::string> writePlantFiles(const Session& session, const std::filesystem::path& outDir,
+                                         const std::string& stem, const std::set<std::string>& formats,
+                                         const std::string& source, io::ExportScene& exported) {
+  const io::ExportOptions options = exportOptions(session.scene().output);
+  exported = exportScene(session, source);
+  std::vector<std::string> written;
+  if (formats.size() == 1 && formats.count("glb")) {
+    // Alone, the .glb streams plant by plant (gltf_writer.h): less memory, and faster.
+    io::writeGlb(exported, outDir / (stem + ".glb"), options);
+    written.push_back((outDir / (stem + ".glb")).string());
+    return written;
+  }
+  // Both formats write the meshes of one model.
+  io::ExportModel model = io::buildExportModel(exported, options);
+  if (formats.count("glb")) {
+    io::writeGlb(model, outDir / (stem + ".glb"));
+    written.push_back((outDir / (stem + ".glb")).string());
+  }
+  if (formats.count("obj")) {
+    io::writeObj(model, outDir / (stem + ".obj"));
+    written.push_back((outDir / (stem + ".obj")).string());
+  }
+  return written;
+}
+
+std::vector<wind::AnimatedPlant> animatedPlants(const Session& session, const io::ExportScene& exported) {
+  const std::vector<plant::GrowthFlowSpecies> species = session.growthFlow();
+  std::vector<wind::AnimatedPlant> animated;
+  for (size_t i = 0; i < exported.plants.size(); ++i) animated.push_back({&exported.plants[i], species.at(i)});
+  return animated;
+}
+
+wind::WindAnimationOptions windClipOptions(const Session& session, float seconds) {
+  const scene::Scene& sc = session.scene();
+  wind::WindAnimationOptions a;
+  a.seconds = seconds;
+  a.fps = sc.output.animationFps;
+  a.maxJoints = sc.output.animationJoints;
+  a.seed = sc.seed;
+  a.mesh = exportOptions(sc.output).mesh;
+  return a;
 }
 
 }  // namespace tendril::session

@@ -6,8 +6,12 @@
 #include "tendril/io/export_scene.h"
 #include "tendril/scene/scene.h"
 #include "tendril/session/session.h"
+#include "tendril/wind/gltf_animation.h"
 
+#include <filesystem>
+#include <set>
 #include <string>
+#include <vector>
 
 namespace tendril::session {
 
@@ -17,5 +21,19 @@ io::ExportOptions exportOptions(const scene::OutputSettings& output);
 // Snapshots of every plant, in scene order, each checked with plant::validate (an Error names
 // `source`), and with output.include_obstacles every obstacle's mesh in world space.
 io::ExportScene exportScene(const Session& session, const std::string& source);
+
+// Meshes the session's plants (and the obstacles, if the scene asks) and writes
+// <outDir>/<stem>.glb and/or .obj (`formats` holds "glb", "obj"), atomically. `source` names the
+// input in validation errors. The snapshot written is kept in `written` (for animation export);
+// returns the files written. What `tendril grow`, `tendril edit` and the Python module's
+// Session.export write.
+std::vector<std::string> writePlantFiles(const Session& session, const std::filesystem::path& outDir,
+                                         const std::string& stem, const std::set<std::string>& formats,
+                                         const std::string& source, io::ExportScene& written);
+
+// The exported plants with their Growth-Flow constants, for the wind and growth clips.
+std::vector<wind::AnimatedPlant> animatedPlants(const Session& session, const io::ExportScene& exported);
+// A wind clip of `seconds` with the scene's output settings (fps, joints, mesh) and seed.
+wind::WindAnimationOptions windClipOptions(const Session& session, float seconds);
 
 }  // namespace tendril::session

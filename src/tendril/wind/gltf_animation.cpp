@@ -555,11 +555,11 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
   return stats;
 }
 
-std::vector<std::filesystem::path> writeWindFrames(const std::vector<AnimatedPlant>& plants,
-                                                   const env::WindField& wind, const WindAnimationOptions& options,
-                                                   const std::filesystem::path& dir, const std::string& stem) {
+void forEachWindFrame(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
+                      const WindAnimationOptions& options, const std::string& source,
+                      const std::function<void(int, const std::vector<plant::PlantModel>&)>& frame) {
   if (!(options.seconds > 0.0f) || options.fps < 1)
-    throw Error(dir.string(), "", "wind frames need seconds > 0 and fps >= 1");
+    throw Error(source, "", "wind frames need seconds > 0 and fps >= 1");
   const int frames = std::max(1, int(std::lround(options.seconds * float(options.fps))));
   const float dt = options.seconds / float(frames);
   // The same motion as the clip (same loop and seeds), one posed plant per plant kept across
@@ -567,26 +567,32 @@ std::vector<std::filesystem::path> writeWindFrames(const std::vector<AnimatedPla
   std::vector<wind::WindMotion> motions;
   motions.reserve(plants.size());
   for (size_t pi = 0; pi < plants.size(); ++pi) {
-    if (!plants[pi].plant) throw Error(dir.string(), "", fmt::format("plant {} is missing", pi));
+    if (!plants[pi].plant) throw Error(source, "", fmt::format("plant {} is missing", pi));
     wind::MotionSettings ms;
     ms.loopSeconds = options.seconds;
     ms.seed = options.seed + pi;
     motions.emplace_back(*plants[pi].plant, plants[pi].species, ms);
   }
   std::vector<plant::PlantModel> posed(plants.size());
+  for (int k = 0; k < frames; ++k) {
+    for (size_t pi = 0; pi < plants.size(); ++pi) motions[pi].step(float(k) * dt, dt, wind, posed[pi]);
+    frame(k, posed);
+  }
+}
+
+std::vector<std::filesystem::path> writeWindFrames(const std::vector<AnimatedPlant>& plants,
+                                                   const env::WindField& wind, const WindAnimationOptions& options,
+                                                   const std::filesystem::path& dir, const std::string& stem) {
   ExportOptions exportOptions;
   exportOptions.mesh = options.mesh;
   std::vector<std::filesystem::path> written;
-  for (int k = 0; k < frames; ++k) {
+  forEachWindFrame(plants, wind, options, dir.string(), [&](int k, const std::vector<plant::PlantModel>& posed) {
     ExportScene scene;
-    for (size_t pi = 0; pi < plants.size(); ++pi) {
-      motions[pi].step(float(k) * dt, dt, wind, posed[pi]);
-      scene.plants.push_back(posed[pi]);
-    }
+    scene.plants = posed;
     std::filesystem::path file = dir / fmt::format("{}_{:04d}.glb", stem, k);
     writeGlb(scene, file, exportOptions);
     written.push_back(std::move(file));
-  }
+  });
   return written;
 }
 

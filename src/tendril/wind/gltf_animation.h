@@ -29,6 +29,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <string>
 #include <vector>
 
 namespace tendril::wind {
@@ -68,6 +70,12 @@ std::vector<int32_t> chooseJoints(const plant::PlantModel& plant, int maxJoints)
 WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
                                          const WindAnimationOptions& options, const std::filesystem::path& path);
 
+// The clip's frames one after the other: calls frame(k, posed) for k = 0 … seconds × fps − 1 with
+// every plant posed at time k / fps (the same sway and leaf motion as the looping clip; frame
+// `frames` would equal frame 0). The posed plants are reused from frame to frame.
+void forEachWindFrame(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
+                      const WindAnimationOptions& options, const std::string& source,
+                      const std::function<void(int, const std::vector<plant::PlantModel>&)>& frame);
 // The per-step sequence: every frame of the same clip (seconds × fps frames, the same sway and
 // leaf motion as the looping clip) as a static .glb of the posed plants, for tools that play
 // neither skins nor morph targets; the leaves are posed exactly rather than to small-angle
