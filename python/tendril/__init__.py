@@ -13,8 +13,6 @@ Tendril's frame is y up, in metres.
 
 from __future__ import annotations
 
-from typing import Any, Iterable, Optional, Sequence
-
 from ._tendril import Error, Model, Part, Plant, Session, models, presets, set_threads, threads, version
 
 __all__ = [
@@ -32,6 +30,10 @@ __all__ = [
 ]
 
 __version__ = version()
+
+
+# Annotations are strings (from __future__ above): typing is not imported, which keeps
+# `import tendril` quick.
 
 
 def _error(location: str, message: str) -> Error:
