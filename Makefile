@@ -1,5 +1,5 @@
 # Thin wrapper over scripts/setup, CMake presets and ctest. See README.md.
-.PHONY: setup build demo test dev bench fuzz clean
+.PHONY: setup build demo test dev bench fuzz clean blender-addon
 
 setup:
 	@scripts/setup
@@ -41,6 +41,13 @@ fuzz: setup
 	./build/fuzz/documents_fuzz build/fuzz/documents-corpus fuzz/documents/corpus -dict=fuzz/documents/documents.dict \
 		$(FUZZ_FLAGS)
 	./build/fuzz/session_fuzz build/fuzz/session-corpus build/fuzz/session-seeds $(FUZZ_FLAGS)
+
+# The Blender add-on (docs/blender.md) as a zip for Edit > Preferences > Add-ons > Install.
+blender-addon:
+	@mkdir -p build
+	@rm -f build/tendril_blender.zip
+	@cd blender && zip -qr ../build/tendril_blender.zip tendril_blender -x '*/__pycache__/*' '*.pyc'
+	@echo "wrote build/tendril_blender.zip"
 
 clean:
 	rm -rf build out
