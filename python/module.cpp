@@ -14,6 +14,7 @@
 
 #include "tendril/core/error.h"
 #include "tendril/core/json_reader.h"
+#include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 #include "tendril/io/export_model.h"
 #include "tendril/lsystem/grammar_files.h"
@@ -38,6 +39,7 @@
 #include <mutex>
 #include <set>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace py = pybind11;
@@ -47,7 +49,8 @@ namespace {
 
 // --- errors ---------------------------------------------------------------------------------
 
-PyObject* gErrorType = nullptr;  // tendril.Error, created at import (lives as long as the module)
+PyObject* gErrorType = nullptr;    // tendril.Error, created at import (lives as long as the module)
+PyObject* gWarningType = nullptr;  // tendril.TendrilWarning
 
 // --- Python values <-> JSON -------------------------------------------------------------------
 
@@ -170,29 +173,74 @@ class PySession {
 
   static std::unique_ptr<PySession> fromScene(const py::dict& scene, const std::string& baseDir, const std::string& source) {
     Json doc = toJson(scene, "");
-    py::gil_scoped_release release;
-    std::filesystem::path dir = baseDir.empty() ? std::filesystem::current_path() : std::filesystem::absolute(baseDir);
-    scene::Scene sc = scene::parseScene(doc, source, dir);
-    return std::make_unique<PySession>(std::make_unique<session::Session>(std::move(sc), std::move(doc), dir),
-                                       std::vector<session::TimedEdit>{}, source);
+    std::vector<std::string> caught;
+    std::unique_ptr<PySession> s;
+    {
+      py::gil_scoped_release release;
+      log::ThreadCapture capture(&caught);
+      std::filesystem::path dir = baseDir.empty() ? std::filesystem::current_path() : std::filesystem::absolute(baseDir);
+      scene::Scene sc = scene::parseScene(doc, source, dir);
+      s = std::make_unique<PySession>(std::make_unique<session::Session>(std::move(sc), std::move(doc), dir),
+                                      std::vector<session::TimedEdit>{}, source);
+    }
+    s->deliver(caught);
+    return s;
   }
 
   static std::unique_ptr<PySession> open(const std::string& path) {
-    py::gil_scoped_release release;
-    if (session::isSessionFile(path)) {
-      session::LoadedSession loaded = session::loadSession(path);
-      return std::make_unique<PySession>(std::move(loaded.session), std::move(loaded.journal), path);
+    std::vector<std::string> caught;
+    std::unique_ptr<PySession> s;
+    {
+      py::gil_scoped_release release;
+      log::ThreadCapture capture(&caught);
+      if (session::isSessionFile(path)) {
+        session::LoadedSession loaded = session::loadSession(path);
+        s = std::make_unique<PySession>(std::move(loaded.session), std::move(loaded.journal), path);
+      } else {
+        s = std::make_unique<PySession>(session::Session::open(path), std::vector<session::TimedEdit>{}, path);
+      }
     }
-    return std::make_unique<PySession>(session::Session::open(path), std::vector<session::TimedEdit>{}, path);
+    s->deliver(caught);
+    return s;
   }
 
-  // Runs f with the GIL released and this session's lock held.
+  // Runs f with the GIL released and this session's lock held; the warnings Tendril writes on
+  // this thread meanwhile become the session's (and Python warnings) rather than stderr lines.
   template <class F>
   auto locked(F&& f) {
-    py::gil_scoped_release release;
-    std::lock_guard lock(mutex_);
-    return f();
+    std::vector<std::string> caught;
+    auto call = [&] {
+      py::gil_scoped_release release;
+      std::lock_guard lock(mutex_);
+      log::ThreadCapture capture(&caught);
+      return f();
+    };
+    try {
+      if constexpr (std::is_void_v<decltype(call())>) {
+        call();
+        deliver(caught);
+      } else {
+        auto result = call();
+        deliver(caught);
+        return result;
+      }
+    } catch (const py::error_already_set&) {
+      throw;
+    } catch (...) {
+      warnings_.insert(warnings_.end(), caught.begin(), caught.end());
+      throw;
+    }
   }
+
+  // Keeps the warnings and issues each as a tendril.TendrilWarning (GIL held).
+  void deliver(std::vector<std::string>& caught) {
+    for (std::string& m : caught) {
+      warnings_.push_back(m);
+      if (PyErr_WarnEx(gWarningType, m.c_str(), 1) < 0) throw py::error_already_set();
+    }
+    caught.clear();
+  }
+  const std::vector<std::string>& warnings() const { return warnings_; }
 
   void step(uint32_t count) {
     locked([&] { editor_->step(count); });
@@ -202,19 +250,19 @@ class PySession {
   // `tendril grow` does. progress(done) after each step.
   uint32_t run(std::optional<int64_t> steps, const std::optional<py::function>& progress) {
     if (steps && *steps < 0) throw Error("<python>", "steps", fmt::format("must be >= 0, got {}", *steps));
-    py::gil_scoped_release release;
-    std::lock_guard lock(mutex_);
-    const uint32_t total = steps ? uint32_t(std::min<int64_t>(*steps, 100'000'000)) : uint32_t(session_->scene().steps);
-    uint32_t done = 0;
-    while (done < total && !session_->finished()) {
-      editor_->step(1);
-      ++done;
-      if (progress) {
-        py::gil_scoped_acquire acquire;
-        (*progress)(done);
+    return locked([&] {
+      const uint32_t total = steps ? uint32_t(std::min<int64_t>(*steps, 100'000'000)) : uint32_t(session_->scene().steps);
+      uint32_t done = 0;
+      while (done < total && !session_->finished()) {
+        editor_->step(1);
+        ++done;
+        if (progress) {
+          py::gil_scoped_acquire acquire;
+          (*progress)(done);
+        }
       }
-    }
-    return done;
+      return done;
+    });
   }
 
   session::Session& session() { return *session_; }
@@ -227,6 +275,7 @@ class PySession {
   std::unique_ptr<session::Editor> editor_;
   std::string source_;
   std::mutex mutex_;
+  std::vector<std::string> warnings_;
 };
 
 session::Edit readEditDict(const py::dict& d) {
@@ -341,6 +390,12 @@ PYBIND11_MODULE(_tendril, m) {
       "'source:location: message'; e.source, e.location and e.message hold its parts.",
       PyExc_Exception, nullptr);
   m.attr("Error") = py::handle(gErrorType);
+  gWarningType = PyErr_NewExceptionWithDoc(
+      "tendril.TendrilWarning",
+      "What Tendril warns about while it opens, grows or exports (a plant that reached its cap, an "
+      "obstacle mesh that is not closed, ...). Session.warnings keeps them too.",
+      PyExc_UserWarning, nullptr);
+  m.attr("TendrilWarning") = py::handle(gWarningType);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
@@ -536,6 +591,9 @@ PYBIND11_MODULE(_tendril, m) {
         Json doc = s.locked([&] { return s.session().sceneDocument(); });
         return fromJson(doc);
       }, "The scene document the session was opened from (a dict).")
+      .def_property_readonly("warnings", [](PySession& s) { return s.warnings(); },
+                             "Every warning Tendril gave for this session so far (also issued as "
+                             "tendril.TendrilWarning).")
       .def_property_readonly("state_hash", [](PySession& s) { return s.locked([&] { return s.session().stateHash(); }); },
                              "Hash of every plant and the environment's editable state.")
       .def("add_plant", [](PySession& s, const py::dict& plant) {

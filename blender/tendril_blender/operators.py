@@ -6,6 +6,7 @@ import math
 import os
 import time
 import traceback
+import warnings
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, StringProperty
@@ -131,20 +132,25 @@ class _TendrilOperator:
             tendril.set_threads(int(prefs.threads))
 
     def grow_session(self, context, tendril, doc, base_dir, what="growing"):
-        """A Session for `doc`, run for the document's steps with progress."""
+        """A Session for `doc`, run for the document's steps with progress. What Tendril warns
+        about (a plant at its cap, an open support mesh) goes to Blender's report area."""
         self._set_threads(context, tendril)
-        s = tendril.Session(doc, base_dir, SOURCE)
-        steps = int(doc.get("steps", 0))
-        if steps > 0:
-            wm = context.window_manager
-            self._progress_begin(context, steps)
-            label = f"Tendril: {what}"
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # reported below, once each, rather than on stderr
+            s = tendril.Session(doc, base_dir, SOURCE)
+            steps = int(doc.get("steps", 0))
+            if steps > 0:
+                wm = context.window_manager
+                self._progress_begin(context, steps)
+                label = f"Tendril: {what}"
 
-            def progress(done):
-                wm.progress_update(min(int(done), steps))
-                self._status(context, f"{label} step {done}/{steps}")
+                def progress(done):
+                    wm.progress_update(min(int(done), steps))
+                    self._status(context, f"{label} step {done}/{steps}")
 
-            s.run(steps, progress)
+                s.run(steps, progress)
+        for w in dict.fromkeys(getattr(s, "warnings", [])):
+            self.report({'WARNING'}, f"Tendril: {w}")
         return s
 
     def finish_objects(self, context, objs):

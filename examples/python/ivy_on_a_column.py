@@ -55,7 +55,9 @@ def main(out: Path) -> None:
         "output": {"radial_segments": 8, "subdivisions": 3},
     }
     s = tendril.Session(scene)
-    steps = s.run(progress=lambda done: print(f"\rgrowing: step {done}", end="", flush=True))
+    # Progress on a terminal: run() calls back after every step.
+    progress = (lambda done: print(f"\rgrowing: step {done}", end="", flush=True)) if sys.stdout.isatty() else None
+    steps = s.run(progress=progress)
     print(f"\rgrew {s.plant_count} plants in {steps} steps: {s.segment_count} segments")
 
     # Stem length per branch order, over every plant: one bar per order.

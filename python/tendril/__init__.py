@@ -13,7 +13,8 @@ Tendril's frame is y up, in metres.
 
 from __future__ import annotations
 
-from ._tendril import Error, Model, Part, Plant, Session, models, presets, set_threads, threads, version
+from ._tendril import (Error, Model, Part, Plant, Session, TendrilWarning, models, presets, set_threads, threads,
+                       version)
 
 __all__ = [
     "Error",
@@ -21,6 +22,7 @@ __all__ = [
     "Part",
     "Plant",
     "Session",
+    "TendrilWarning",
     "mesh_obstacle",
     "models",
     "presets",

@@ -275,3 +275,27 @@ def test_export_and_render(tmp_path):
         s.export(str(tmp_path / "ivy.fbx"))
     s.render(str(tmp_path / "ivy.png"), 160, 120)
     assert (tmp_path / "ivy.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_the_python_example_runs(tmp_path):
+    example = SOURCE / "examples" / "python" / "ivy_on_a_column.py"
+    subprocess.run(["/usr/bin/python3" if Path("/usr/bin/python3").exists() else "python3", str(example), str(tmp_path)],
+                   check=True, capture_output=True, env=dict(os.environ, MPLBACKEND="Agg"))
+    for name in ("column.png", "stem-length-by-order.png", "column.glb"):
+        assert (tmp_path / name).stat().st_size > 1000, name
+
+
+def test_warnings_reach_python():
+    scene = wall_scene(steps=400, model="particles", species={"model": "particles", "max_particles": 40})
+    # An open mesh (one triangle) is accepted with a warning.
+    scene["environment"]["obstacles"].append(
+        tendril.mesh_obstacle([[2, 0, 2], [3, 0, 2], [2, 1, 2]], [[0, 1, 2]], name="sheet"))
+    with pytest.warns(tendril.TendrilWarning, match="sheet.*not a closed mesh"):
+        s = tendril.Session(scene)
+    with pytest.warns(tendril.TendrilWarning, match="reached max_particles"):
+        s.run(200)
+    assert any("not a closed mesh" in w for w in s.warnings)
+    assert any("max_particles" in w for w in s.warnings)
+    healthy = tendril.Session(wall_scene(steps=20))
+    healthy.run()
+    assert healthy.warnings == []

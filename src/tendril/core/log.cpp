@@ -9,6 +9,7 @@ namespace tendril::log {
 namespace {
 
 std::atomic<Level> gLevel{Level::Info};
+thread_local std::vector<std::string>* tCapture = nullptr;
 
 spdlog::logger& logger() {
   static std::shared_ptr<spdlog::logger> instance = [] {
@@ -25,8 +26,15 @@ spdlog::logger& logger() {
 void setLevel(Level level) { gLevel = level; }
 Level level() { return gLevel; }
 
+ThreadCapture::ThreadCapture(std::vector<std::string>* into) : previous_(tCapture) { tCapture = into; }
+ThreadCapture::~ThreadCapture() { tCapture = previous_; }
+
 void write(Level level, std::string_view message) {
   if (level < gLevel.load()) return;
+  if (tCapture && level >= Level::Warn && level != Level::Off) {
+    tCapture->emplace_back(message);
+    return;
+  }
   switch (level) {
     case Level::Debug: logger().debug("{}", message); break;
     case Level::Info: logger().info("{}", message); break;

@@ -4,7 +4,9 @@
 
 #include <fmt/format.h>
 
+#include <string>
 #include <string_view>
+#include <vector>
 
 namespace tendril::log {
 
@@ -13,6 +15,20 @@ enum class Level { Debug, Info, Warn, Error, Off };
 void setLevel(Level level);
 Level level();
 void write(Level level, std::string_view message);
+
+// While one lives, the warnings and errors written on this thread go into `into` instead of
+// stderr (the Python module hands a session's warnings to Python this way). Captures nest; the
+// innermost one takes the messages.
+class ThreadCapture {
+ public:
+  explicit ThreadCapture(std::vector<std::string>* into);
+  ~ThreadCapture();
+  ThreadCapture(const ThreadCapture&) = delete;
+  ThreadCapture& operator=(const ThreadCapture&) = delete;
+
+ private:
+  std::vector<std::string>* previous_;
+};
 
 template <class... Args>
 void debug(fmt::format_string<Args...> f, Args&&... args) {
