@@ -22,6 +22,7 @@
 #include "tendril/render/session_render.h"
 #include "tendril/scene/model_types.h"
 #include "tendril/scene/scene.h"
+#include "tendril/scene/settings_schema.h"
 #include "tendril/session/edit.h"
 #include "tendril/session/edit_script.h"
 #include "tendril/session/plant_export.h"
@@ -295,9 +296,22 @@ std::shared_ptr<PyModel> meshSession(PySession& s) {
   return m;
 }
 
-py::list windFrames(PySession& s, float seconds, int fps) {
+py::list windFrames(PySession& s, float seconds, int fps, const std::optional<py::dict>& windDict) {
   if (!(seconds > 0.0f) || seconds > 600.0f) throw Error("<python>", "seconds", fmt::format("must be in (0, 600], got {}", seconds));
   if (fps < 1 || fps > 240) throw Error("<python>", "fps", fmt::format("must be in [1, 240], got {}", fps));
+  // Another wind than the scene's for the motion only (the plants as grown): a scene's "wind"
+  // object, analytic (constant or gusty).
+  std::optional<env::WindField> other;
+  if (windDict) {
+    const Json j = toJson(*windDict, "/wind");
+    JsonObject o(j, "<python>", "/wind");
+    env::WindSettings w = scene::readWind(o);
+    o.finish();
+    if (w.mode == env::WindMode::Sph)
+      throw Error("<python>", "/wind/mode", "wind_frames takes an analytic wind (constant or gusty), not sph");
+    for (env::WindEmitter& em : w.emitters) em = scene::normalised(em);
+    other.emplace(std::move(w));
+  }
   // Per frame, per part of mesh() (objects in order, their parts in order): the posed positions.
   std::vector<std::vector<std::vector<Vec3>>> frames;
   s.locked([&] {
@@ -308,7 +322,7 @@ py::list windFrames(PySession& s, float seconds, int fps) {
     wind::WindAnimationOptions a = session::windClipOptions(session, seconds);
     a.fps = fps;
     const std::vector<wind::AnimatedPlant> animated = session::animatedPlants(session, exported);
-    wind::forEachWindFrame(animated, session.environment().windField(), a, s.source(),
+    wind::forEachWindFrame(animated, other ? *other : session.environment().windField(), a, s.source(),
                            [&](int k, const std::vector<plant::PlantModel>& posed) {
       io::ExportScene scene;
       scene.plants = posed;
@@ -598,7 +612,16 @@ PYBIND11_MODULE(_tendril, m) {
                              "Hash of every plant and the environment's editable state.")
       .def("add_plant", [](PySession& s, const py::dict& plant) {
         const Json j = toJson(plant, "");
-        return s.locked([&] { return s.session().addPlant(j, "<python>"); });
+        return s.locked([&] {
+          // Errors name the plant's place in the session's scene, as the scene reader does.
+          const size_t index = s.session().plantCount();
+          try {
+            return s.session().addPlant(j, "<python>");
+          } catch (const Error& e) {
+            if (e.source() != "<python>") throw;
+            throw Error(s.source(), fmt::format("/plants/{}{}", index, e.location()), e.message());
+          }
+        });
       }, py::arg("plant"),
          "Adds a plant now from a scene-file plant object (model, species name or dict, grammar, graph, position, "
          "...). Returns its index.")
@@ -654,10 +677,11 @@ PYBIND11_MODULE(_tendril, m) {
       }, py::arg("script"), py::arg("steps") = 0,
          "Replays an edit script (a dict or a file path) from now; then steps until `steps` steps have run.")
       .def("mesh", &meshSession, "Meshes every plant with the scene's output settings (a Model).")
-      .def("wind_frames", &windFrames, py::arg("seconds") = 4.0f, py::arg("fps") = 24,
+      .def("wind_frames", &windFrames, py::arg("seconds") = 4.0f, py::arg("fps") = 24, py::arg("wind") = py::none(),
            "The plants moving in the scene's wind (Growth-Flow motion), as the looping clip of `tendril grow "
            "--wind-animation`: for each of seconds × fps frames, the posed positions of every part of mesh(), in "
-           "Model.parts order ((n, 3) float32 arrays with the same vertices as at rest).")
+           "Model.parts order ((n, 3) float32 arrays with the same vertices as at rest). `wind`, a scene's wind "
+           "object (constant or gusty), moves the plants as grown in another wind than the scene's.")
       .def("export", &exportFile, py::arg("path"),
            "Writes the plants as .glb or .obj (by the extension), byte for byte what `tendril grow` writes.")
       .def("render", [](PySession& s, const std::string& path, int width, int height) {

@@ -96,7 +96,7 @@ def test_a_bad_species_dict_names_its_place():
     msg = str(e.value)
     assert "\n" not in msg
     assert "/species/growth_rate" in msg, msg
-    assert e.value.location.endswith("/species/growth_rate")
+    assert e.value.location == "/plants/1/species/growth_rate" and e.value.source == "<python>"
     # Scenes: the pointer of the bad key inside the scene document.
     scene = wall_scene()
     scene["plants"][0]["sed"] = 1
@@ -219,7 +219,8 @@ def test_every_model_from_python():
 def test_obstacles_from_files(tmp_path):
     s = tendril.Session(wall_scene(steps=10))
     (tmp_path / "tri.obj").write_text("v 2 0 2\nv 3 0 2\nv 2 1 2\nf 1 2 3\n")
-    i = s.import_obstacle(str(tmp_path / "tri.obj"), name="tri", position=[0, 0.5, 0])
+    with pytest.warns(tendril.TendrilWarning, match=r"\"tri\".*not a closed mesh"):
+        i = s.import_obstacle(str(tmp_path / "tri.obj"), name="tri", position=[0, 0.5, 0])
     assert i == 2 and s.obstacle_count == 3
     s.undo()
     assert s.obstacle_count == 2
@@ -242,6 +243,13 @@ def test_wind_frames_move_the_plant():
     assert moved > 1e-4
     with pytest.raises(tendril.Error, match="fps: must be in"):
         s.wind_frames(1.0, 0)
+    # The same plant in another wind: calm air does not move it, a stronger one more.
+    calm = s.wind_frames(1.0, 8, wind={"velocity": [0, 0, 0]})
+    assert max(np.abs(calm[3][i] - calm[0][i]).max() for i in range(len(parts))) < 1e-6
+    strong = s.wind_frames(1.0, 8, wind={"mode": "gusty", "velocity": [15, 0, 0], "gust_strength": 0.4})
+    assert max(np.abs(strong[3][i] - strong[0][i]).max() for i in range(len(parts))) > moved
+    with pytest.raises(tendril.Error, match=r"/wind/velocity"):
+        s.wind_frames(1.0, 8, wind={"velocity": "strong"})
 
 
 def test_two_sessions_grow_at_once_in_threads():
