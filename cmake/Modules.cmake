@@ -39,7 +39,11 @@ function(tendril_module name)
     TENDRIL_VERSION="${PROJECT_VERSION}"
     TENDRIL_EXAMPLES_DIR="${PROJECT_SOURCE_DIR}/examples")
   set_target_properties(tendril_${name} PROPERTIES OUTPUT_NAME tendril_${name})
-  if(name STREQUAL "core")
+  # A precompiled header shared by every module (none in fuzzing builds, where the readers
+  # are compiled with coverage and without it: core would then have no source that builds it
+  # for the others to reuse).
+  if(TENDRIL_BUILD_FUZZ)
+  elseif(name STREQUAL "core")
     target_precompile_headers(tendril_core PRIVATE
       <vector> <string> <memory> <optional> <Eigen/Core> <Eigen/Geometry> <nlohmann/json.hpp>)
   else()
@@ -51,7 +55,7 @@ function(tendril_module name)
     # traced Eigen loops would run a hundred times slower (and without the precompiled header,
     # which is built without coverage).
     set(covered ${sources})
-    list(FILTER covered INCLUDE REGEX "/(core|scene|graph|session|lsystem)/|(_state|_archive|_reader|/species)\\.cpp$")
+    list(FILTER covered INCLUDE REGEX "/(core|scene|graph|session|lsystem)/|(_state|_archive|_reader|/species|/mesh_import)\\.cpp$")
     set_source_files_properties(${covered} PROPERTIES
       COMPILE_OPTIONS "-fsanitize=fuzzer-no-link;-fsanitize-coverage-ignorelist=${PROJECT_SOURCE_DIR}/fuzz/coverage-ignorelist.txt"
       OBJECT_DEPENDS ${PROJECT_SOURCE_DIR}/fuzz/coverage-ignorelist.txt

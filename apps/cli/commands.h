@@ -35,9 +35,10 @@ struct RegisterCommand {
 struct CommonOptions {
   int threads = 0;
   bool quiet = false;
+  int64_t maxMeshTriangles = -1;  // < 0: env::MeshImportLimits' default
 };
 void addCommonOptions(CLI::App& sub, CommonOptions& options);
-// Applies --threads and --quiet (log level).
+// Applies --threads, --quiet (log level) and --max-mesh-triangles.
 void applyCommonOptions(const CommonOptions& options);
 // "x,y,z" → Vec3; anything else is an Error naming the option.
 Vec3 parseVec3(const std::string& text, const char* option);

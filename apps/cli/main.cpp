@@ -4,6 +4,7 @@
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
+#include "tendril/env/mesh_import.h"
 
 #include <fmt/format.h>
 
@@ -23,11 +24,20 @@ void addCommonOptions(CLI::App& sub, CommonOptions& options) {
   sub.add_option("--threads", options.threads, "Worker threads (0 = all cores); results do not depend on it")
       ->check(CLI::Range(0, 1024));
   sub.add_flag("-q,--quiet", options.quiet, "Print nothing but errors");
+  sub.add_option("--max-mesh-triangles", options.maxMeshTriangles,
+                 "Refuse mesh files (obstacles, imports) with more triangles than this, before reading them where "
+                 "their header tells (default 16777216)")
+      ->check(CLI::Range(int64_t(1), int64_t(1) << 32));
 }
 
 void applyCommonOptions(const CommonOptions& options) {
   setThreadCount(options.threads);
   if (options.quiet) log::setLevel(log::Level::Error);
+  if (options.maxMeshTriangles > 0) {
+    env::MeshImportLimits limits = env::meshImportLimits();
+    limits.maxTriangles = uint64_t(options.maxMeshTriangles);
+    env::setMeshImportLimits(limits);
+  }
 }
 
 // "x,y,z" → Vec3; anything else is an Error naming the option.

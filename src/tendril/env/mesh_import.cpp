@@ -6,12 +6,115 @@
 #include <assimp/scene.h>
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <system_error>
 
 namespace tendril::env {
 namespace {
+
+std::atomic<uint64_t> gMaxFileBytes{MeshImportLimits{}.maxFileBytes};
+std::atomic<uint64_t> gMaxTriangles{MeshImportLimits{}.maxTriangles};
+
+Error tooManyTriangles(const std::string& name, uint64_t triangles, const char* what) {
+  return Error(name, "", fmt::format("{} {} triangles, more than the {} a mesh may have (--max-mesh-triangles)", what,
+                                     triangles, gMaxTriangles.load()));
+}
+
+// OFF: "OFF" (or COFF, NOFF, ...), then the vertex, face and edge counts, then the vertices and
+// faces, one per line. Assimp allocates for the declared counts before reading them, and it
+// quietly accepts face indices past the vertices: check that the file can hold what it
+// declares (an ASCII vertex takes at least "0 0 0\n", a face "3 0 1 2\n") and walk the faces.
+void checkOffStructure(const std::string& name, const std::string& data) {
+  // The file's tokens with their line numbers, comments (# to the end of a line) left out.
+  size_t pos = 0;
+  int line = 1;
+  auto next = [&](std::string& token) {
+    token.clear();
+    while (pos < data.size()) {
+      const char c = data[pos];
+      if (c == '#') {
+        while (pos < data.size() && data[pos] != '\n') ++pos;
+      } else if (std::isspace(static_cast<unsigned char>(c))) {
+        if (c == '\n') ++line;
+        ++pos;
+      } else {
+        break;
+      }
+    }
+    while (pos < data.size() && !std::isspace(static_cast<unsigned char>(data[pos])) && data[pos] != '#') token += data[pos++];
+    return !token.empty();
+  };
+  std::string token;
+  if (!next(token) || token.size() < 3 || token.compare(token.size() - 3, 3, "OFF") != 0) return;
+  const std::string magic = token;
+  auto count = [&](const char* what) -> uint64_t {
+    if (!next(token) || !std::isdigit(static_cast<unsigned char>(token[0])) || token.size() > 19 ||
+        token.find_first_not_of("0123456789") != std::string::npos)
+      throw Error(name, fmt::format("{}", line), fmt::format("OFF header: expected the {} count after \"{}\"", what, magic));
+    return std::stoull(token);
+  };
+  const uint64_t vertices = count("vertex"), faces = count("face");
+  count("edge");
+  const uint64_t body = data.size() - pos;
+  if (vertices > body / 6 || faces > body / 8 || vertices * 6 + faces * 8 > body)
+    throw Error(name, "", fmt::format("OFF header declares {} vertices and {} faces, more than the file's {} bytes "
+                                      "can hold", vertices, faces, data.size()));
+  if (faces > gMaxTriangles.load()) throw tooManyTriangles(name, faces, "OFF header declares at least");
+  if (magic != "OFF") return;  // colours, normals or texture coordinates per vertex: left to Assimp
+  for (uint64_t v = 0; v < vertices; ++v)
+    for (int k = 0; k < 3; ++k)
+      if (!next(token)) throw Error(name, "", fmt::format("truncated OFF: the data ends inside vertex {} of {}", v, vertices));
+  for (uint64_t f = 0; f < faces; ++f) {
+    const int at = line;
+    if (!next(token)) throw Error(name, "", fmt::format("truncated OFF: the data ends inside face {} of {}", f, faces));
+    const uint64_t n = std::strtoull(token.c_str(), nullptr, 10);
+    if (n > body) throw Error(name, fmt::format("{}", at), fmt::format("face {} has {} vertices", f, n));
+    for (uint64_t k = 0; k < n; ++k) {
+      if (!next(token)) throw Error(name, "", fmt::format("truncated OFF: the data ends inside face {} of {}", f, faces));
+      char* end = nullptr;
+      const unsigned long long index = std::strtoull(token.c_str(), &end, 10);
+      if (*end != '\0' || token[0] == '-' || index >= vertices)
+        throw Error(name, fmt::format("{}", at),
+                    fmt::format("face {}: vertex index \"{}\" out of range (the file has {} vertices)", f, token, vertices));
+    }
+    // Colours may follow a face's indices on its line.
+    while (pos < data.size() && data[pos] != '\n') ++pos;
+  }
+}
+
+// STL: binary (an 80-byte header, the triangle count, then 50 bytes per triangle) or ASCII
+// ("solid ..."; a binary file's header may start so too, then its size fits its count).
+void checkStlHeader(const std::string& name, const std::filesystem::path& path, uint64_t size) {
+  std::ifstream in(path, std::ios::binary);
+  char head[84];
+  if (!in.read(head, 84)) return;  // too short for either: Assimp says so
+  uint32_t n = 0;
+  std::memcpy(&n, head + 80, 4);
+  const bool binary = std::strncmp(head, "solid", 5) != 0 || 84 + 50 * uint64_t(n) == size;
+  if (!binary) {
+    // ASCII: a facet takes well over 100 bytes.
+    if (size / 100 > gMaxTriangles.load()) throw tooManyTriangles(name, size / 100, "ASCII STL of about");
+    return;
+  }
+  if (84 + 50 * uint64_t(n) > size)
+    throw Error(name, "", fmt::format("binary STL declares {} triangles, more than the file's {} bytes can hold", n, size));
+  if (n > gMaxTriangles.load()) throw tooManyTriangles(name, n, "binary STL declares");
+}
+
+// OBJ: every face line is at least one triangle.
+void checkObjFaces(const std::string& name, const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  uint64_t faces = 0;
+  while (std::getline(in, line))
+    if (line.size() > 1 && line[0] == 'f' && (line[1] == ' ' || line[1] == '\t') && ++faces > gMaxTriangles.load())
+      throw tooManyTriangles(name, faces, "OBJ file has over");
+}
 
 int plyTypeSize(const std::string& t) {
   if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
@@ -72,6 +175,8 @@ void checkPlyStructure(const std::string& name, const std::string& data) {
       elements.back().props.push_back(pr);
     }
   }
+  for (const Element& e : elements)
+    if (e.name == "face" && e.count > gMaxTriangles.load()) throw tooManyTriangles(name, e.count, "PLY header declares at least");
   auto truncated = [&](const Element& e, uint64_t i) {
     return Error(name, "", fmt::format("truncated PLY: the data ends inside {} {} of {}", e.name, i, e.count));
   };
@@ -114,6 +219,13 @@ void checkPlyStructure(const std::string& name, const std::string& data) {
 
 }  // namespace
 
+void setMeshImportLimits(const MeshImportLimits& limits) {
+  gMaxFileBytes = limits.maxFileBytes;
+  gMaxTriangles = limits.maxTriangles;
+}
+
+MeshImportLimits meshImportLimits() { return {gMaxFileBytes.load(), gMaxTriangles.load()}; }
+
 TriangleMesh loadMeshFile(const std::filesystem::path& path) {
   const std::string name = path.string();
   std::error_code ec;
@@ -121,12 +233,24 @@ TriangleMesh loadMeshFile(const std::filesystem::path& path) {
   if (std::filesystem::is_directory(path, ec)) throw Error(name, "", "is a directory, not a mesh file");
   if (std::filesystem::file_size(path, ec) == 0 || ec) throw Error(name, "", "mesh file is empty");
 
+  const uint64_t size = std::filesystem::file_size(path, ec);
+  if (size > gMaxFileBytes.load())
+    throw Error(name, "", fmt::format("mesh file is {} bytes, more than the {} a mesh file may have", size,
+                                      gMaxFileBytes.load()));
+
+  // What the header declares, against the file's size and the limits, before Assimp allocates
+  // for it.
   std::string ext = path.extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".ply") {
+  if (ext == ".ply" || ext == ".off") {
     std::ifstream in(path, std::ios::binary);
     std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    checkPlyStructure(name, data);
+    if (ext == ".ply") checkPlyStructure(name, data);
+    else checkOffStructure(name, data);
+  } else if (ext == ".stl") {
+    checkStlHeader(name, path, size);
+  } else if (ext == ".obj") {
+    checkObjFaces(name, path);
   }
 
   Assimp::Importer importer;
@@ -167,20 +291,28 @@ TriangleMesh loadMeshFile(const std::filesystem::path& path) {
       for (unsigned k = 0; k < face.mNumIndices; ++k)
         if (face.mIndices[k] >= mesh->mNumVertices)
           throw Error(name, fmt::format("mesh {} face {}", mi, f), "vertex index out of range");
+      if (out.indices.size() / 3 + face.mNumIndices - 2 > gMaxTriangles.load())
+        throw tooManyTriangles(name, out.indices.size() / 3 + face.mNumIndices - 2, "mesh has over");
       for (unsigned k = 1; k + 1 < face.mNumIndices; ++k)
         out.indices.insert(out.indices.end(), {base + face.mIndices[0], base + face.mIndices[k],
                                                base + face.mIndices[k + 1]});
     }
   };
   // Depth-first over the node hierarchy, accumulating transforms (glTF and FBX place meshes
-  // through nodes). A depth limit guards against cyclic or absurd hierarchies.
+  // through nodes). A depth limit guards against cyclic or absurd hierarchies, and a limit on
+  // the nodes visited against a hierarchy that shares children (a few nodes listing the same
+  // child twice at each level would be visited 2^depth times).
   struct Item {
     const aiNode* node;
     aiMatrix4x4 parentFromWorld;
     int depth;
   };
   std::vector<Item> stack = {{scene->mRootNode, aiMatrix4x4(), 0}};
+  constexpr uint64_t kMaxVisits = uint64_t(1) << 20;
+  uint64_t visits = 0;
   while (!stack.empty()) {
+    if (++visits > kMaxVisits)
+      throw Error(name, "", fmt::format("cannot read mesh: its node hierarchy places meshes more than {} times", kMaxVisits));
     Item it = stack.back();
     stack.pop_back();
     if (it.depth > 256) throw Error(name, "", "cannot read mesh: node hierarchy is too deep");
