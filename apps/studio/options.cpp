@@ -19,6 +19,15 @@ int64_t parseInteger(const std::string& text, const std::string& option, int64_t
   return value;
 }
 
+double parseSeconds(const std::string& text, const std::string& option, double hi) {
+  double value = 0.0;
+  const char* end = text.data() + text.size();
+  auto [ptr, ec] = std::from_chars(text.data(), end, value);
+  if (ec != std::errc() || ptr != end || !(value >= 0.0 && value <= hi))
+    throw Error("command line", option, fmt::format("expected seconds in [0, {}] (got \"{}\")", hi, text));
+  return value;
+}
+
 void parseSize(const std::string& text, StudioOptions& o) {
   size_t x = text.find('x');
   if (x == std::string::npos)
@@ -72,6 +81,17 @@ StudioOptions parseOptions(const std::vector<std::string>& args) {
       o.paused = true;
     } else if (a == "--no-sway") {
       o.sway = false;
+    } else if (a == "--autosave") {
+      o.autosave = value();
+      if (o.autosave.empty()) throw Error("command line", a, "expected a file name or \"off\"");
+    } else if (a == "--autosave-interval") {
+      o.autosaveInterval = parseSeconds(value(), a, 86400.0);
+    } else if (a == "--autosave-edits") {
+      o.autosaveEdits = int(parseInteger(value(), a, 0, 1000000));
+    } else if (a == "--restore-autosave") {
+      o.restoreAutosave = value();
+      if (o.restoreAutosave != "ask" && o.restoreAutosave != "yes" && o.restoreAutosave != "no")
+        throw Error("command line", a, fmt::format("expected ask, yes or no (got \"{}\")", o.restoreAutosave));
     } else if (!a.empty() && a[0] == '-') {
       throw Error("command line", a, "unknown option (see tendril-studio --help)");
     } else if (o.input.empty()) {
@@ -109,6 +129,12 @@ std::string usage() {
          "  --no-sway              start with the plants still in the wind (the wind panel's \"sway\")\n"
          "  --select KIND:INDEX    select plant:N, obstacle:N, light:N, emitter:N or stroke:N at the start\n"
          "  --stats                print per-frame timing: simulation, scene update, GL draw\n"
+         "  --autosave FILE|off    autosave file (default $XDG_STATE_HOME/tendril/autosave.tses, else\n"
+         "                         ~/.local/state/tendril/autosave.tses; headless runs: none unless given)\n"
+         "  --autosave-interval S  autosave a changed session every S seconds (default 60; 0 = never)\n"
+         "  --autosave-edits K     ... and after every K edits (default 20; 0 = never)\n"
+         "  --restore-autosave ask|yes|no  an autosave left by a session that did not exit cleanly: ask\n"
+         "                         (default), restore it or discard it\n"
          "  -h, --help             this text\n";
 }
 

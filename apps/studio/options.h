@@ -24,6 +24,13 @@ struct StudioOptions {
   bool stats = false;      // per-frame timing on stdout
   bool paused = false;     // start paused (headless runs too: the frames then only move in the wind)
   bool sway = true;        // plants move in the scene's wind (the wind panel's toggle)
+  // The autosave (autosave.h): its file ("off": none; empty: the default file for interactive
+  // runs, none for headless ones), how often, and the answer to restoring one a session that
+  // did not exit cleanly left ("ask": the dialog; headless runs answer with "yes" or "no").
+  std::string autosave;
+  double autosaveInterval = 60.0;  // seconds of wall time (0 = no timed autosaves)
+  int autosaveEdits = 20;          // edits (0 = no autosaves counted in edits)
+  std::string restoreAutosave = "ask";
   bool help = false;
 
   bool headless() const { return frames >= 0; }

@@ -119,6 +119,7 @@ void Studio::Impl::drawUi() {
   ImGui::End();
   ImGui::PopStyleVar();
   drawFileDialog();
+  drawRestorePrompt();
 }
 
 void Studio::Impl::drawMenu() {
@@ -201,6 +202,27 @@ void Studio::Impl::drawFileDialog() {
     }
     ImGui::EndPopup();
   }
+}
+
+// The autosave of a session that did not exit cleanly (autosave.h): restore it or discard it.
+void Studio::Impl::drawRestorePrompt() {
+  if (!restorePending) return;
+  const char* title = "Restore session";
+  if (!ImGui::IsPopupOpen(title)) ImGui::OpenPopup(title);
+  ImGui::SetNextWindowSize(ImVec2(520, 0));
+  if (!ImGui::BeginPopupModal(title, nullptr, ImGuiWindowFlags_NoSavedSettings)) return;
+  ImGui::Text("Restore the session from %s?", autosave->leftoverTime().c_str());
+  ImGui::TextWrapped("The studio did not exit cleanly; this is its autosave (%s).", autosave->path().c_str());
+  const bool restore = ImGui::Button("Restore", ImVec2(100, 0));
+  ImGui::SameLine();
+  const bool discard = ImGui::Button("Discard", ImVec2(100, 0));
+  if (restore || discard) {
+    restorePending = false;
+    ImGui::CloseCurrentPopup();
+  }
+  ImGui::EndPopup();
+  if (restore) restoreAutosave();
+  else if (discard) discardAutosave();
 }
 
 void Studio::Impl::drawTools() {

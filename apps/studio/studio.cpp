@@ -48,6 +48,28 @@ Studio::Impl::Impl(const StudioOptions& o) : options(o), window(o.width, o.heigh
   sway = o.sway;
   openFile(o.input.empty() ? std::filesystem::path(TENDRIL_EXAMPLES_DIR) / "scenes/default.json"
                            : std::filesystem::path(o.input));
+  // The autosave: headless runs (tests, scripts) have none unless asked, so that they leave
+  // nothing behind and do not meet each other's.
+  AutosaveSettings autosaveSettings;
+  if (!o.autosave.empty() && o.autosave != "off") autosaveSettings.path = o.autosave;
+  else if (o.autosave.empty() && !o.headless()) autosaveSettings.path = defaultAutosavePath();
+  autosaveSettings.intervalSeconds = o.autosaveInterval;
+  autosaveSettings.edits = o.autosaveEdits;
+  autosave = std::make_unique<Autosave>(std::move(autosaveSettings));
+  autosave->reset(*editor);
+  if (!autosave->message().empty()) {
+    log::warn("{}", autosave->message());
+    status = autosave->message();
+    statusIsError = true;
+  }
+  if (autosave->leftover()) {
+    log::info("{}: an autosave from {} of a session that did not exit cleanly", autosave->path().string(),
+              autosave->leftoverTime());
+    // Answered before the script is loaded: it replays on the restored session.
+    if (o.restoreAutosave == "yes") restoreAutosave();
+    else if (o.restoreAutosave == "no") discardAutosave();
+    else restorePending = true;
+  }
   if (!o.select.empty()) {
     const size_t colon = o.select.find(':');
     const std::string kind = o.select.substr(0, colon);
@@ -79,6 +101,10 @@ void Studio::Impl::openFile(const std::filesystem::path& path) {
   session = std::move(opened);
   editor = std::make_unique<session::Editor>(*session);
   editor->setJournal(std::move(journal));
+  // A session saved while a part was being dragged: no mouse holds it here, so the gesture ends
+  // (journaled, so the journal still replays).
+  if (editor->dragging()) editor->apply(session::DragEnd{});
+  if (autosave) autosave->reset(*editor);
   currentPath = path;
   selection = {};
   gesture = {};
@@ -95,6 +121,43 @@ void Studio::Impl::openFile(const std::filesystem::path& path) {
   nextSeed = session->plantCount() + 1;
   status = fmt::format("opened {}", path.string());
   statusIsError = false;
+}
+
+void Studio::Impl::restoreAutosave() {
+  const std::string when = autosave->leftoverTime();
+  autosave->restored();
+  try {
+    openFile(autosave->path());
+  } catch (const Error& e) {
+    if (options.headless()) throw;
+    status = fmt::format("cannot restore the autosave: {}", e.what());
+    statusIsError = true;
+    return;
+  }
+  // Saving goes to a file of the user's choosing, not over the autosave (a clean exit removes it).
+  currentPath.clear();
+  status = fmt::format("restored the session autosaved at {}", when);
+  statusIsError = false;
+  log::info("{} ({})", status, autosave->path().string());
+}
+
+void Studio::Impl::discardAutosave() {
+  status = fmt::format("discarded the session autosaved at {}", autosave->leftoverTime());
+  statusIsError = false;
+  autosave->discard();
+  log::info("{} ({})", status, autosave->path().string());
+}
+
+void Studio::Impl::autosaveIfDue() {
+  if (restorePending || gesture.active || editor->dragging()) return;
+  try {
+    if (autosave->update(*session, *editor))
+      log::info("autosaved {} (step {})", autosave->path().string(), session->stepCount());
+  } catch (const Error& e) {
+    status = fmt::format("autosave: {}", e.what());
+    statusIsError = true;
+    log::warn("{}", status);
+  }
 }
 
 void Studio::Impl::saveFile(const std::filesystem::path& path) {
@@ -221,7 +284,7 @@ Vec2 Studio::Impl::viewportPixel(float x, float y) const {
 
 void Studio::Impl::handleKeys() {
   ImGuiIO& io = ImGui::GetIO();
-  if (io.WantTextInput) return;
+  if (io.WantTextInput || restorePending) return;
   const bool ctrl = io.KeyCtrl;
   if (ctrl && ImGui::IsKeyPressed(GLFW_KEY_Z, false)) {
     if (io.KeyShift) redo();
@@ -605,8 +668,11 @@ int Studio::Impl::run() {
       std::fflush(stdout);
     }
     ++frameCount;
+    autosaveIfDue();
     if (lastFrame) break;
   }
+  // A clean exit: nothing to restore next time.
+  autosave->finish();
   if (headless) {
     if (script && nextScriptEdit < script->edits.size())
       log::warn("{}: {} edit(s) at steps past the last frame were not applied", script->source,

@@ -2,6 +2,7 @@
 // ImGui panels). Private to apps/studio.
 #pragma once
 
+#include "autosave.h"
 #include "graph_panel.h"
 #include "lsystem_panel.h"
 #include "studio.h"
@@ -50,6 +51,13 @@ struct Studio::Impl {
   void exportFile(const std::filesystem::path& path);
   // File > Import support mesh: the mesh as a new obstacle (an AddObstacle edit).
   void importMesh(const std::filesystem::path& path);
+  // The autosave a session that did not exit cleanly left: opened as File > Open opens a
+  // session (an Error is the status line; headless, it is thrown), or removed.
+  void restoreAutosave();
+  void discardAutosave();
+  // Once a frame: the autosave, when due (not while the restore question is open or during a
+  // gesture); an Error becomes the status line.
+  void autosaveIfDue();
   // Applies an edit through the library's Editor; an Error becomes the status line.
   bool apply(const session::Edit& edit);
   void undo();
@@ -85,6 +93,7 @@ struct Studio::Impl {
   void drawTimeline();
   void drawStatus();
   void drawFileDialog();
+  void drawRestorePrompt();
 
   StudioOptions options;
   Window window;
@@ -97,6 +106,8 @@ struct Studio::Impl {
   size_t nextScriptEdit = 0;
   uint32_t scriptStart = 0;  // the editor's steps run when the script started
   std::filesystem::path currentPath;
+  std::unique_ptr<Autosave> autosave;
+  bool restorePending = false;  // the "Restore the session from ...?" dialog is open
 
   ViewportScene view;
   render::Camera camera;

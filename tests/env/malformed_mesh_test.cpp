@@ -88,6 +88,15 @@ std::vector<Case> malformedMeshes() {
        "PLY header declares at least 4000000000"},
       {"huge.stl", binaryStl, "binary STL declares 4000000000"},
       {"huge.gltf", gltf(1500000000, R"([{"mesh": 0}])"), "out of range"},
+      // A header line the importer does not know (it looped forever on this one, found by fuzz/mesh).
+      {"keyword.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\npropat ascii uchar int vertex_indices\nat z\n"
+       "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+       "PLY header: unknown keyword \"propat\""},
+      {"end-header.ply",
+       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 0\nproperty list uchar int vertex_indices\nend_headerBIN 5\n1 0 0\n0 1 0\n3 0 1 2\n",
+       "end_header must be on a line of its own"},
       // Truncated.
       {"truncated.stl", truncatedStl, "binary STL declares 12"},
       {"truncated.ply",

@@ -10,14 +10,20 @@
 
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <string>
+#include <thread>
 
 namespace tendril {
 namespace {
@@ -109,6 +115,9 @@ TEST(StudioCommandLine, BadArgumentsExitTwoNamingTheArgument) {
       {"a.json b.json", "b.json"},
       {"--script", "--script"},
       {"--frames 1 --screenshot x.png --export x.fbx", "--export"},
+      {"--restore-autosave maybe", "--restore-autosave"},
+      {"--autosave-interval -1", "--autosave-interval"},
+      {"--autosave-edits many", "--autosave-edits"},
   };
   for (const auto& [args, named] : cases) {
     std::string out, err;
@@ -382,6 +391,176 @@ TEST(StudioHeadless, ExportUsesTheScenesOutputSettings) {
   // The default settings would have written other bytes.
   io::writeGlb(scene, dir / "default.glb");
   EXPECT_FALSE(exported == readText(dir / "default.glb"));
+}
+
+// Runs the studio with `args` under xvfb-run until its stdout (--stats) reports frame `frame`,
+// then SIGKILLs the studio itself (not xvfb-run: a shell between them records its pid), as a
+// crash would end it. Returns false when it ended or stalled before.
+bool runStudioAndKill(const fs::path& dir, const std::string& args, int frame, std::string* err) {
+  const fs::path out = dir / "stdout.txt", errFile = dir / "stderr.txt", pidFile = dir / "studio.pid";
+  fs::remove(pidFile);
+  std::ofstream(dir / "run.sh") << "'" TENDRIL_STUDIO_PATH "' " << args << " > " << quoted(out) << " 2> "
+                                << quoted(errFile) << " &\necho $! > " << quoted(pidFile) << "\nwait $!\n";
+  setenv("LP_NUM_THREADS", "2", 0);
+  const std::string cmd =
+      "xvfb-run -a -s '-screen 0 1280x1024x24' sh " + quoted(dir / "run.sh") + " 2> " + quoted(dir / "xvfb.txt");
+  const pid_t shell = ::fork();
+  if (shell == 0) {
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  const std::string wanted = "frame " + std::to_string(frame) + ":";
+  bool reached = false;
+  pid_t studio = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(90);
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (studio == 0) studio = pid_t(std::atol(readText(pidFile).c_str()));
+    if (studio > 0 && readText(out).find(wanted) != std::string::npos) {
+      reached = true;
+      break;
+    }
+    if (::waitpid(shell, nullptr, WNOHANG) == shell) {
+      if (err) *err = readText(errFile);
+      return false;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  if (studio > 0) ::kill(studio, SIGKILL);
+  ::waitpid(shell, nullptr, 0);
+  if (err) *err = readText(errFile);
+  return reached;
+}
+
+size_t editCount(const std::vector<session::TimedEdit>& journal) {
+  return size_t(std::count_if(journal.begin(), journal.end(), [](const session::TimedEdit& e) {
+    return !std::holds_alternative<session::Step>(e.edit);
+  }));
+}
+
+// The autosave of a studio that is killed holds the session as of its last autosave, and the
+// next start restores it (or discards it); a clean exit removes it.
+TEST(StudioAutosave, RestoresTheSessionOfAKilledStudio) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  const fs::path scene = kTestDir / "wall.json", script = kTestDir / "sculpt-nocut.json";
+  const fs::path autosave = dir / "state/autosave.tses";
+  // An autosave after every edit and none on the clock: the last one follows the drag's end at
+  // step 100 (frame 24; autosaves wait for a drag to end), and the studio is killed at frame 40.
+  std::string err;
+  ASSERT_TRUE(runStudioAndKill(dir,
+                               quoted(scene) + " --script " + quoted(script) +
+                                   " --frames 100000 --speed 4 --size 800x600 --stats --screenshot " +
+                                   quoted(dir / "never.png") + " --autosave " + quoted(autosave) +
+                                   " --autosave-edits 1 --autosave-interval 0",
+                               40, &err))
+      << err;
+  EXPECT_FALSE(fs::exists(dir / "never.png"));
+  ASSERT_TRUE(fs::exists(autosave)) << err;
+  EXPECT_NE(err.find("autosaved"), std::string::npos) << err;
+  const std::string autosaved = readText(autosave);
+  session::LoadedSession loaded = session::loadSession(autosave);
+  const session::Session& s = *loaded.session;
+  EXPECT_EQ(s.stepCount(), 100u);
+  EXPECT_EQ(editCount(loaded.journal), 5u) << "seed, paint, drag begin, move and end";
+  // The state the library's runner reaches with the same script in as many steps.
+  {
+    auto reference = session::Session::open(scene);
+    session::Editor editor(*reference);
+    session::runEditScript(editor, session::loadEditScript(script), s.stepCount());
+    EXPECT_EQ(reference->segmentCount(), s.segmentCount());
+    EXPECT_EQ(reference->stateHash(), s.stateHash());
+  }
+  ASSERT_GT(s.segmentCount(), 0u);
+
+  // The next start (on the bare wall) restores it, as File > Open would: the saved session is
+  // the autosave's, and the clean exit removes the autosave.
+  std::string out;
+  const fs::path restored = dir / "restored.tses";
+  ASSERT_EQ(runStudio(dir,
+                      quoted(scene) + " --frames 0 --size 800x600 --stats --screenshot " + quoted(dir / "b.png") +
+                          " --autosave " + quoted(autosave) + " --restore-autosave yes --save-session " +
+                          quoted(restored),
+                      true, &out, &err),
+            0)
+      << err;
+  EXPECT_NE(err.find("an autosave from"), std::string::npos) << err;
+  EXPECT_NE(err.find("restored the session autosaved at"), std::string::npos) << err;
+  EXPECT_EQ(reportedSegments(err), long(s.segmentCount())) << err;
+  EXPECT_EQ(session::loadSession(restored).session->stateHash(), s.stateHash());
+  EXPECT_FALSE(fs::exists(autosave)) << "a clean exit removes the autosave";
+
+  // Unanswered (the dialog stays open in a headless run), it is kept for the next start, and
+  // nothing is autosaved over it meanwhile.
+  std::ofstream(autosave, std::ios::binary) << autosaved;
+  ASSERT_EQ(runStudio(dir,
+                      quoted(scene) + " --script " + quoted(script) +
+                          " --frames 8 --speed 4 --size 800x600 --screenshot " + quoted(dir / "c.png") +
+                          " --autosave " + quoted(autosave) + " --autosave-edits 1",
+                      true, &out, &err),
+            0)
+      << err;
+  EXPECT_NE(err.find("an autosave from"), std::string::npos) << err;
+  EXPECT_EQ(err.find("autosaved"), std::string::npos) << err;
+  EXPECT_TRUE(readText(autosave) == autosaved);
+
+  // Another studio holding the autosave's lock: it is left alone, neither offered nor removed.
+  {
+    const int lock = ::open((autosave.string() + ".lock").c_str(), O_RDWR | O_CLOEXEC);
+    ASSERT_GE(lock, 0);
+    ASSERT_EQ(::flock(lock, LOCK_EX | LOCK_NB), 0);
+    ASSERT_EQ(runStudio(dir,
+                        quoted(scene) + " --frames 0 --size 800x600 --screenshot " + quoted(dir / "d.png") +
+                            " --autosave " + quoted(autosave) + " --restore-autosave yes",
+                        true, &out, &err),
+              0)
+        << err;
+    ::close(lock);
+    EXPECT_NE(err.find("in use by another tendril-studio"), std::string::npos) << err;
+    EXPECT_EQ(reportedSegments(err), 0) << err;
+    EXPECT_TRUE(readText(autosave) == autosaved);
+  }
+
+  // Discarded: the scene opened as given, the autosave gone.
+  ASSERT_EQ(runStudio(dir,
+                      quoted(scene) + " --frames 0 --size 800x600 --screenshot " + quoted(dir / "e.png") +
+                          " --autosave " + quoted(autosave) + " --restore-autosave no",
+                      true, &out, &err),
+            0)
+      << err;
+  EXPECT_NE(err.find("discarded the session autosaved at"), std::string::npos) << err;
+  EXPECT_EQ(reportedSegments(err), 0) << err;
+  EXPECT_FALSE(fs::exists(autosave));
+}
+
+TEST(StudioAutosave, ACleanExitRemovesTheAutosave) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  const fs::path autosave = dir / "autosave.tses";
+  std::string out, err;
+  ASSERT_EQ(runStudio(dir,
+                      quoted(kTestDir / "wall.json") + " --script " + quoted(kTestDir / "sculpt-nocut.json") +
+                          " --frames 30 --speed 4 --size 800x600 --screenshot " + quoted(dir / "a.png") +
+                          " --autosave " + quoted(autosave) + " --autosave-edits 2 --autosave-interval 0",
+                      true, &out, &err),
+            0)
+      << err;
+  // Autosaved along the way (after the seed and the stroke, then after the drag), then removed.
+  EXPECT_NE(err.find("autosaved " + autosave.string() + " (step 12)"), std::string::npos) << err;
+  EXPECT_NE(err.find("autosaved " + autosave.string() + " (step 100)"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(autosave));
+  // Headless runs autosave only when asked: nothing under $XDG_STATE_HOME (the default place).
+  const char* state = std::getenv("XDG_STATE_HOME");
+  const std::string previous = state ? state : "";
+  setenv("XDG_STATE_HOME", (dir / "state").c_str(), 1);
+  const int code = runStudio(dir,
+                             quoted(kTestDir / "wall.json") + " --script " + quoted(kTestDir / "sculpt-nocut.json") +
+                                 " --frames 2 --size 800x600 --autosave-edits 1 --screenshot " + quoted(dir / "b.png"),
+                             true, &out, &err);
+  if (state) setenv("XDG_STATE_HOME", previous.c_str(), 1);
+  else unsetenv("XDG_STATE_HOME");
+  ASSERT_EQ(code, 0) << err;
+  EXPECT_EQ(err.find("autosave"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir / "state"));
 }
 
 }  // namespace

@@ -128,10 +128,16 @@ int plyTypeSize(const std::string& t) {
 // the header declares through the data (binary or ASCII) and report where the file runs out.
 void checkPlyStructure(const std::string& name, const std::string& data) {
   if (data.compare(0, 3, "ply") != 0) return;
-  size_t headerEnd = data.find("end_header");
+  // "end_header" on a line of its own (Debian's Assimp 5.2 loops forever on one followed by
+  // anything else, found by fuzz/mesh).
+  size_t headerEnd = data.find("\nend_header");
   if (headerEnd == std::string::npos) throw Error(name, "", "PLY header has no end_header");
-  size_t body = data.find('\n', headerEnd);
-  body = (body == std::string::npos) ? data.size() : body + 1;
+  ++headerEnd;
+  size_t body = headerEnd + 10;
+  if (body < data.size() && data[body] == '\r') ++body;
+  if (body < data.size() && data[body] != '\n')
+    throw Error(name, "", "PLY header: end_header must be on a line of its own");
+  body = std::min(body + 1, data.size());
   struct Property {
     int size = 0;       // scalar size, or list item size
     int countSize = 0;  // > 0 for list properties
@@ -151,6 +157,15 @@ void checkPlyStructure(const std::string& name, const std::string& data) {
     std::istringstream ls(line);
     std::string word;
     ls >> word;
+    // Only the header's own keywords: Debian's Assimp 5.2 loops forever on a header line it
+    // does not know (found by fuzz/mesh).
+    if (lineNo == 1 ? word != "ply"
+                    : !(word.empty() || word == "format" || word == "element" || word == "property" ||
+                        word == "comment" || word == "obj_info"))
+      throw Error(name, fmt::format("{}", lineNo),
+                  lineNo == 1 ? "a PLY file starts with \"ply\""
+                              : fmt::format("PLY header: unknown keyword \"{}\" (expected format, element, property, "
+                                            "comment, obj_info or end_header)", word.substr(0, 40)));
     if (word == "format") {
       ls >> format;
     } else if (word == "element") {

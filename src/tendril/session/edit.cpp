@@ -569,6 +569,36 @@ void Editor::setJournal(std::vector<TimedEdit> journal) {
     const Step* s = std::get_if<Step>(&last.edit);
     stepsRun_ = last.atStep + (s ? s->count : 0);
   }
+  // A drag gesture under way when the journal was written (a session saved mid-drag) is under
+  // way here too, as in a replay of the journal: the saved state still pulls the part, so
+  // drag_move and drag_end go on with it and a second drag_begin is refused. The gesture is
+  // followed through the journal as apply() follows it, undo and redo restoring what the
+  // entry they take back held (the journal records only edits that were applied).
+  struct Gesture {
+    bool dragging = false;
+    Drag drag;
+  };
+  Gesture now;
+  std::vector<Gesture> undone, redone;
+  for (const TimedEdit& t : journal_) {
+    const Edit& e = t.edit;
+    if (std::holds_alternative<Undo>(e)) {
+      if (undone.empty()) continue;
+      redone.push_back(now), now = undone.back(), undone.pop_back();
+    } else if (std::holds_alternative<Redo>(e)) {
+      if (redone.empty()) continue;
+      undone.push_back(now), now = redone.back(), redone.pop_back();
+    } else if (const Step* st = std::get_if<Step>(&e)) {
+      if (st->count > 0) redone.clear();
+    } else if (std::holds_alternative<DragEnd>(e)) {
+      now.dragging = false;
+    } else if (!std::holds_alternative<DragMove>(e)) {
+      undone.push_back(now), redone.clear();
+      if (const DragBegin* b = std::get_if<DragBegin>(&e)) now = {true, {b->plant, b->particle, b->strength}};
+    }
+  }
+  dragging_ = now.dragging;
+  drag_ = now.dragging ? now.drag : Drag{};
 }
 
 void Editor::record(uint32_t at, const Edit& edit) {

@@ -223,7 +223,8 @@ class Editor {
   // (steps are merged into one entry per run of steps). Replaying it with runEditScript on
   // the same starting session gives the same state.
   const std::vector<TimedEdit>& journal() const { return journal_; }
-  // Continues an earlier journal (a loaded session file): the clock resumes at its end.
+  // Continues an earlier journal (a loaded session file): the clock resumes at its end, and a
+  // drag gesture the journal leaves under way is under way (dragging(), drag()).
   void setJournal(std::vector<TimedEdit> journal);
 
  private:
