@@ -41,7 +41,7 @@ fuzz: setup
 	./build/fuzz/documents_fuzz build/fuzz/documents-corpus fuzz/documents/corpus -dict=fuzz/documents/documents.dict \
 		$(FUZZ_FLAGS)
 	./build/fuzz/session_fuzz build/fuzz/session-corpus build/fuzz/session-seeds $(FUZZ_FLAGS)
-	./build/fuzz/mesh_fuzz build/fuzz/mesh-corpus fuzz/mesh/corpus -dict=fuzz/mesh/mesh.dict $(FUZZ_FLAGS)
+	LSAN_OPTIONS=suppressions=$(CURDIR)/fuzz/mesh/lsan.supp ./build/fuzz/mesh_fuzz build/fuzz/mesh-corpus fuzz/mesh/corpus -dict=fuzz/mesh/mesh.dict $(FUZZ_FLAGS)
 
 # The Blender add-on (docs/blender.md) as a zip for Edit > Preferences > Add-ons > Install.
 blender-addon:

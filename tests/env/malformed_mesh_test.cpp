@@ -97,6 +97,9 @@ std::vector<Case> malformedMeshes() {
        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
        "element face 0\nproperty list uchar int vertex_indices\nend_headerBIN 5\n1 0 0\n0 1 0\n3 0 1 2\n",
        "end_header must be on a line of its own"},
+      {"magic.ply",
+       "plY\nformat ascii 1+0\nelement vertex 3\nproperty float x\npropetrnt vertex_ind\nseeicnd_header\n0 0 0\n",
+       "a PLY file starts with a line \"ply\""},
       // Truncated.
       {"truncated.stl", truncatedStl, "binary STL declares 12"},
       {"truncated.ply",

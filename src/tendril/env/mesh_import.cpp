@@ -127,7 +127,10 @@ int plyTypeSize(const std::string& t) {
 // Assimp fills a PLY whose data stops early with zeros instead of failing. Walk the elements
 // the header declares through the data (binary or ASCII) and report where the file runs out.
 void checkPlyStructure(const std::string& name, const std::string& data) {
-  if (data.compare(0, 3, "ply") != 0) return;
+  // "ply" on the first line, exactly (Assimp also takes "plY" and then loops forever on the
+  // rest, found by fuzz/mesh).
+  if (!(data.compare(0, 4, "ply\n") == 0 || data.compare(0, 5, "ply\r\n") == 0))
+    throw Error(name, "1", "a PLY file starts with a line \"ply\"");
   // "end_header" on a line of its own (Debian's Assimp 5.2 loops forever on one followed by
   // anything else, found by fuzz/mesh).
   size_t headerEnd = data.find("\nend_header");
