@@ -100,6 +100,9 @@ std::vector<Case> malformedMeshes() {
       {"magic.ply",
        "plY\nformat ascii 1+0\nelement vertex 3\nproperty float x\npropetrnt vertex_ind\nseeicnd_header\n0 0 0\n",
        "a PLY file starts with a line \"ply\""},
+      {"keyword.off", "OFF3 40294967295 2 1\n3 0 1\n", "an OFF file starts with \"OFF\""},
+      {"degenerate.off", "OFF\n4 4 6\n0 0 0\n2 4 6\n0 0 0\n2 0 0\n0 1 0\n 0 0\n0 1 0\n0 001\n3 0\nf 1\n3 0 1 3\n",
+       "face 0: \"0\" is not a polygon's vertex count"},
       // Truncated.
       {"truncated.stl", truncatedStl, "binary STL declares 12"},
       {"truncated.ply",

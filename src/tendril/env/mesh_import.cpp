@@ -50,7 +50,14 @@ void checkOffStructure(const std::string& name, const std::string& data) {
     return !token.empty();
   };
   std::string token;
-  if (!next(token) || token.size() < 3 || token.compare(token.size() - 3, 3, "OFF") != 0) return;
+  // The keyword alone: [ST][C][N][4][n]OFF (Assimp reads "OFF3 ..." as "OFF" followed by counts,
+  // found by fuzz/mesh, so anything else is refused here).
+  auto keyword = [](const std::string& t) {
+    return t.size() >= 3 && t.size() <= 8 && t.compare(t.size() - 3, 3, "OFF") == 0 &&
+           t.find_first_not_of("STCN4n") >= t.size() - 3;
+  };
+  if (!next(token) || !keyword(token))
+    throw Error(name, "1", fmt::format("an OFF file starts with \"OFF\" (or COFF, NOFF, ...), got \"{}\"", token.substr(0, 40)));
   const std::string magic = token;
   auto count = [&](const char* what) -> uint64_t {
     if (!next(token) || !std::isdigit(static_cast<unsigned char>(token[0])) || token.size() > 19 ||
@@ -72,8 +79,12 @@ void checkOffStructure(const std::string& name, const std::string& data) {
   for (uint64_t f = 0; f < faces; ++f) {
     const int at = line;
     if (!next(token)) throw Error(name, "", fmt::format("truncated OFF: the data ends inside face {} of {}", f, faces));
-    const uint64_t n = std::strtoull(token.c_str(), nullptr, 10);
-    if (n > body) throw Error(name, fmt::format("{}", at), fmt::format("face {} has {} vertices", f, n));
+    char* countEnd = nullptr;
+    const uint64_t n = std::strtoull(token.c_str(), &countEnd, 10);
+    // A face is a polygon: Assimp crashes on one of fewer than three vertices (found by fuzz/mesh).
+    if (*countEnd != '\0' || token[0] == '-' || n < 3 || n > body)
+      throw Error(name, fmt::format("{}", at),
+                  fmt::format("face {}: \"{}\" is not a polygon's vertex count (3 or more)", f, token.substr(0, 40)));
     for (uint64_t k = 0; k < n; ++k) {
       if (!next(token)) throw Error(name, "", fmt::format("truncated OFF: the data ends inside face {} of {}", f, faces));
       char* end = nullptr;
