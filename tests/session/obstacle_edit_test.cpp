@@ -21,19 +21,10 @@ namespace {
 using namespace session;
 namespace fs = std::filesystem;
 
-// A closed box from `lo` to `hi` as OBJ text (outward quads).
-std::string boxObj(const Vec3& lo, const Vec3& hi) {
-  std::string s;
-  for (int i = 0; i < 8; ++i)
-    s += fmt::format("v {} {} {}\n", (i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
-  s += "f 2 4 8 6\nf 1 5 7 3\nf 3 7 8 4\nf 1 2 6 5\nf 5 6 8 7\nf 1 3 4 2\n";
-  return s;
-}
-
 // The wall of test::sessionScene as a mesh file: 2 m wide, 1.5 m tall, its front face at z = 0.
 fs::path writeWall(const fs::path& dir) {
   fs::path p = dir / "wall.obj";
-  test::writeText(p, boxObj(Vec3(-1, 0, -0.1f), Vec3(1, 1.5f, 0)));
+  test::writeText(p, test::boxObj(Vec3(-1, 0, -0.1f), Vec3(1, 1.5f, 0)));
   return p;
 }
 

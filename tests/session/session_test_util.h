@@ -7,6 +7,8 @@
 #include "tendril/scene/scene.h"
 #include "tendril/session/session.h"
 
+#include <fmt/format.h>
+
 #include <memory>
 #include <string>
 
@@ -42,6 +44,15 @@ inline std::unique_ptr<session::Session> makeSession(const std::string& json, co
   Json doc = parseJson(json, source);
   scene::Scene s = scene::parseScene(doc, source, sourceDir());
   return std::make_unique<session::Session>(std::move(s), std::move(doc), sourceDir());
+}
+
+// A closed box from `lo` to `hi` as OBJ text (outward quads): a mesh for add_obstacle.
+inline std::string boxObj(const Vec3& lo, const Vec3& hi) {
+  std::string s;
+  for (int i = 0; i < 8; ++i)
+    s += fmt::format("v {} {} {}\n", (i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
+  s += "f 2 4 8 6\nf 1 5 7 3\nf 3 7 8 4\nf 1 2 6 5\nf 5 6 8 7\nf 1 3 4 2\n";
+  return s;
 }
 
 }  // namespace tendril::test

@@ -94,15 +94,6 @@ const std::array<const char*, 4> kBadGrammars = {
     "axiom: F\nderivation length: x\n",   // a directive's value is not a number
 };
 
-// A closed box from `lo` to `hi` as OBJ text (outward quads): the mesh add_obstacle imports.
-std::string boxObj(const Vec3& lo, const Vec3& hi) {
-  std::string s;
-  for (int i = 0; i < 8; ++i)
-    s += fmt::format("v {} {} {}\n", (i & 1) ? hi.x() : lo.x(), (i & 2) ? hi.y() : lo.y(), (i & 4) ? hi.z() : lo.z());
-  s += "f 2 4 8 6\nf 1 5 7 3\nf 3 7 8 4\nf 1 2 6 5\nf 5 6 8 7\nf 1 3 4 2\n";
-  return s;
-}
-
 uint64_t envNumber(const char* name, uint64_t fallback) {
   const char* text = std::getenv(name);
   if (!text || !*text) return fallback;
@@ -130,7 +121,7 @@ double peakRssMb() { return procStatusMb("VmHWM:"); }
 class EditGenerator {
  public:
   EditGenerator(uint64_t seed, const fs::path& dir) : rng_(seed), dir_(dir) {
-    test::writeText(dir / "post.obj", boxObj(Vec3(-0.04f, 0, -0.04f), Vec3(0.04f, 0.5f, 0.04f)));
+    test::writeText(dir / "post.obj", test::boxObj(Vec3(-0.04f, 0, -0.04f), Vec3(0.04f, 0.5f, 0.04f)));
     test::writeText(dir / "empty.obj", "# no faces\n");
     fig2_ = readJsonFile(test::sourceDir() / "examples/graphs/fig2.json");
   }
