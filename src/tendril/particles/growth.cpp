@@ -380,7 +380,12 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
       xr_[leaf] = xr_[i] + qr_[i] * Vec3(0, a_[i], 0) + qr_[leaf] * Vec3(0, a_[leaf], 0);
       updateMass(leaf);
     } else {
-      leaves_.push_back({i, (q_[i].conjugate() * world).normalized(), 0.05f * leafSize, leafSize, shape, leafThickness});
+      leaves_.push_back({.particle = i,
+                         .particleFromLeaf = (q_[i].conjugate() * world).normalized(),
+                         .size = 0.05f * leafSize,
+                         .maxSize = leafSize,
+                         .shape = shape,
+                         .thickness = leafThickness});
     }
   }
 }
@@ -423,8 +428,12 @@ void ParticleWorld::attachLeavesOfLargePlants() {
     for (uint32_t i = 0; i < capacity(); ++i) {
       if (!(flags_[i] & kActive) || !(flags_[i] & kLeaf) || plant_[i] != pid || parent_[i] == kNone) continue;
       const uint32_t p = parent_[i];
-      leaves_.push_back({p, (q_[p].conjugate() * q_[i]).normalized(), 2.0f * a_[i], 2.0f * targetHalfLength_[i],
-                         leafShape_[i], s.leafThickness * flow_[i].leafThickness});
+      leaves_.push_back({.particle = p,
+                         .particleFromLeaf = (q_[p].conjugate() * q_[i]).normalized(),
+                         .size = 2.0f * a_[i],
+                         .maxSize = 2.0f * targetHalfLength_[i],
+                         .shape = leafShape_[i],
+                         .thickness = s.leafThickness * flow_[i].leafThickness});
       release(i);
     }
   }

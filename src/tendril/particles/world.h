@@ -55,11 +55,14 @@ struct WorldSettings {
   Vec3 gravity = Vec3(0, -9.81f, 0);  // m/s²
   int iterations = 3;                 // shape-matching passes per step
   bool plantCollisions = true;        // plant–plant and self collisions
+  uint8_t padding0[3] = {};           // (the world's state is saved as bytes: no padding left unset)
   float restingSpeed = 0.05f;         // a fallen piece slower than this (m/s)...
   float restingTime = 1.0f;           // ...for this long (s) is at rest
   float removeRestingAfter = 3.0f;    // resting pieces disappear after this long (s); 0 keeps them
+  uint32_t padding1 = 0;
   uint64_t seed = 1;                  // scene seed
 };
+static_assert(sizeof(WorldSettings) == 48, "WorldSettings is saved as bytes: make every padding byte a member");
 
 struct StepTimings {
   double growth = 0, dynamics = 0, collisions = 0, breaking = 0;  // seconds of the last step
@@ -68,12 +71,16 @@ struct StepTimings {
 // A leaf attached to a branch particle (large plants): it follows the particle rigidly.
 struct AttachedLeaf {
   uint32_t particle = kNone;
+  uint8_t padding0[sizeof(Quat) - sizeof(uint32_t)] = {};  // (saved as bytes: no padding left unset)
   Quat particleFromLeaf = Quat::Identity();
   float size = 0.0f;     // current blade length (m)
   float maxSize = 0.0f;  // full-grown blade length (m)
   uint16_t shape = 0;
+  uint16_t padding1 = 0;
   float thickness = 0.0f;  // blade thickness (m)
 };
+static_assert(sizeof(AttachedLeaf) == 2 * sizeof(Quat) + 4 * sizeof(float),
+              "AttachedLeaf is saved as bytes: make every padding byte a member");
 
 // The world takes part in the simulated air (models::AirCoupling): its grown branch particles
 // (not leaves) are the air's bodies, and the air's push is the external acceleration of eq. 1.
