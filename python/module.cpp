@@ -262,6 +262,7 @@ class PySession {
           (*progress)(done);
         }
       }
+      session_->reportGrowth();  // plants that stopped early, and why: TendrilWarnings
       return done;
     });
   }
@@ -608,6 +609,22 @@ PYBIND11_MODULE(_tendril, m) {
       .def_property_readonly("warnings", [](PySession& s) { return s.warnings(); },
                              "Every warning Tendril gave for this session so far (also issued as "
                              "tendril.TendrilWarning).")
+      .def("growth_problems", [](PySession& s) {
+        const auto found = s.locked([&] { return s.session().diagnoseGrowth(); });
+        py::list out;
+        for (const session::Session::GrowthReport& r : found) {
+          py::dict d;
+          d["plant"] = r.plant;
+          d["cause"] = models::causeName(r.problem.cause);
+          d["stopped"] = r.problem.stopped;
+          d["message"] = r.problem.message;
+          out.append(d);
+        }
+        return out;
+      }, "Plants that stopped growing in their first steps or stay far below their species' size, and why: "
+         "dicts of plant (index), cause (\"seed-blocked\", \"no-support\", \"no-light\", \"crowded\", \"cap\", ...), "
+         "stopped (else still growing, small) and message (docs/diagnostics.md). [] when every plant grows as its "
+         "species does.")
       .def_property_readonly("state_hash", [](PySession& s) { return s.locked([&] { return s.session().stateHash(); }); },
                              "Hash of every plant and the environment's editable state.")
       .def("add_plant", [](PySession& s, const py::dict& plant) {

@@ -69,6 +69,7 @@ int runEdit(const EditOptions& o) {
     });
     progress.finish(fmt::format("{} segments", session->segmentCount()));
   }
+  session->reportGrowth();  // plants that stopped early, and why
 
   io::ExportScene exported;
   std::vector<std::string> written = writePlantFiles(*session, outDir, "plant", formats, o.input, exported);

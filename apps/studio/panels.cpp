@@ -295,9 +295,14 @@ void Studio::Impl::drawSceneTree() {
   ImGui::SetNextItemOpen(true, ImGuiCond_Once);
   if (ImGui::TreeNode("Plants")) {
     const auto& plants = view.plants();
-    for (uint32_t p = 0; p < std::min(plants.size(), session->plantCount()); ++p)
+    for (uint32_t p = 0; p < std::min(plants.size(), session->plantCount()); ++p) {
+      // A plant that stopped early or stays small is marked (its inspector says why).
+      const bool problem = std::any_of(growthProblems.begin(), growthProblems.end(),
+                                       [&](const session::Session::GrowthReport& r) { return r.plant == p; });
       item(Selection::Kind::Plant, p,
-           fmt::format("{} [{}] {} seg##p{}", plants[p].name, session->plantSpec(p).model, plants[p].nodeCount(), p));
+           fmt::format("{} [{}] {} seg{}##p{}", plants[p].name, session->plantSpec(p).model, plants[p].nodeCount(),
+                       problem ? "  (!)" : "", p));
+    }
     ImGui::TreePop();
   }
   ImGui::SetNextItemOpen(true, ImGuiCond_Once);
@@ -350,6 +355,12 @@ void Studio::Impl::drawPlantPanel(uint32_t p) {
   const models::PlantSpec& spec = session->plantSpec(p);
   ImGui::Text("%s  (model %s)", m.name.c_str(), spec.model.c_str());
   ImGui::Text("%zu segments, %zu leaves", m.nodeCount(), m.leafCount());
+  for (const session::Session::GrowthReport& r : growthProblems)
+    if (r.plant == p) {
+      ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1, 0.8f, 0.3f, 1));
+      ImGui::TextWrapped("%s: %s", r.problem.stopped ? "stopped" : "stays small", r.problem.why.c_str());
+      ImGui::PopStyleColor();
+    }
   if (selection.node && *selection.node < m.nodeCount()) {
     uint32_t n = *selection.node;
     ImGui::Text("segment %u: length %.3f m, radius %.4f m, age %.1f s", n, m.length[n], m.radius[n], m.age[n]);
@@ -605,6 +616,22 @@ void Studio::Impl::drawStatus() {
               "|  %s  |",
               session->plantCount(), session->segmentCount(), lastStepMs, timing.frame,
               timing.simulation, timing.update, timing.draw, toolName(tool));
+  // Plants that stopped early or stay small, before the last action's status (a long line is
+  // cut at the window's edge): the first one's cause, every one's whole message on hover.
+  if (!growthProblems.empty()) {
+    ImGui::SameLine();
+    const std::string more =
+        growthProblems.size() > 1 ? fmt::format("  (+{} more plants)", growthProblems.size() - 1) : std::string();
+    const session::Session::GrowthReport& first = growthProblems.front();
+    ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "plant \"%s\" %s: %s%s  |",
+                       session->plantSpec(first.plant).name.c_str(), first.problem.stopped ? "stopped" : "stays small",
+                       first.problem.why.c_str(), more.c_str());
+    if (ImGui::IsItemHovered()) {
+      ImGui::BeginTooltip();
+      for (const session::Session::GrowthReport& r : growthProblems) ImGui::TextUnformatted(r.problem.message.c_str());
+      ImGui::EndTooltip();
+    }
+  }
   ImGui::SameLine();
   if (statusIsError) ImGui::TextColored(ImVec4(1, 0.45f, 0.4f, 1), "%s", status.c_str());
   else ImGui::TextUnformatted(status.c_str());

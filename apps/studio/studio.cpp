@@ -265,6 +265,16 @@ void Studio::Impl::simulate() {
   }
   timing.simulation = timer.milliseconds();
   if (playing && speed > 0) lastStepMs = timing.simulation / speed;
+  checkGrowth();
+}
+
+void Studio::Impl::checkGrowth() {
+  const uint32_t run = editor->stepsRun();
+  if (run == growthCheckedAt) return;
+  const bool paused = !playing || session->finished();
+  if (!paused && run < growthCheckedAt + kGrowthCheckSteps && run > growthCheckedAt) return;
+  growthCheckedAt = run;
+  growthProblems = session->reportGrowth();
 }
 
 // Six pixels at the depth of the camera's target, in metres: how close to a thin branch the

@@ -130,6 +130,12 @@ struct Studio::Impl {
   uint64_t frameCount = 0;
   std::string status;
   bool statusIsError = false;
+  // Plants that stopped growing early or stay small, and why (Session::reportGrowth), shown
+  // under the status line; found again every kGrowthCheckSteps steps and when growth pauses.
+  std::vector<session::Session::GrowthReport> growthProblems;
+  uint32_t growthCheckedAt = 0;  // the editor's steps run when they were last found
+  static constexpr uint32_t kGrowthCheckSteps = 20;
+  void checkGrowth();
 
   // Tool settings.
   int seedModel = 0;  // index into kSeedModels

@@ -86,6 +86,24 @@ TEST(Cli, ValidateAcceptsGoodAndRejectsBadScenes) {
                          ":/plants/0/sed: unknown key \"sed\" (did you mean \"seed\"?)");
 }
 
+TEST(Cli, ValidateReportsSeedsThatWillNotGrow) {
+  // One ivy by a wall, one on open ground far from it: validate grows each alone for its first
+  // steps and names the one that stops, with why; a seed that will not grow is a warning.
+  auto dir = test::scratchDir();
+  test::writeText(dir / "seeds.json", R"({"tendril": 1, "environment": {"obstacles": [
+      {"name": "ground", "type": "plane", "size": [4, 4]},
+      {"name": "wall", "type": "wall", "size": [2, 1.5, 0.1], "position": [0, 0, -0.05]}]},
+      "plants": [{"name": "by-the-wall", "position": [0, 0, 0.05]}, {"name": "lost", "position": [0, 0, 1.5]}]})");
+  auto r = runTendril("validate " + quoted(dir / "seeds.json"), dir);
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: " + (dir / "seeds.json").string() + ":/plants/1: plant \"lost\" stopped growing"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("no support in reach"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("by-the-wall"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1 of the plants will not grow as their species does"), std::string::npos) << r.err;
+}
+
 struct BadScene {
   const char* name;
   const char* json;

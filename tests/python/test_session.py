@@ -319,3 +319,18 @@ def test_warnings_reach_python():
     healthy = tendril.Session(wall_scene(steps=20))
     healthy.run()
     assert healthy.warnings == []
+
+
+def test_a_plant_that_stops_early_says_why():
+    # Ivy seeded 1.5 m in front of the wall: nothing to climb, its shoots die in a few steps.
+    scene = wall_scene(steps=60)
+    scene["plants"].append({"name": "lost", "model": "climb", "position": [0.0, 0.0, 1.5]})
+    s = tendril.Session(scene)
+    with pytest.warns(tendril.TendrilWarning, match='plant "lost" stopped growing.*no support in reach'):
+        s.run()
+    problems = s.growth_problems()
+    assert [(p["plant"], p["cause"], p["stopped"]) for p in problems] == [(1, "no-support", True)]
+    assert problems[0]["message"] in s.warnings
+    healthy = tendril.Session(wall_scene(steps=60))
+    healthy.run()
+    assert healthy.growth_problems() == []

@@ -249,6 +249,47 @@ TEST(StudioHeadless, ShowsTheSimulatedAir) {
   EXPECT_GT(greenViewportPixels(io::readImage(dir / "air.png")), 20000);
 }
 
+// Amber pixels in the status bar (the bottom 26 pixels): where it names a plant that stopped.
+int amberStatusPixels(const io::Image& image) {
+  int amber = 0;
+  for (int y = image.height - 26; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const uint8_t* p = image.pixel(x, y);
+      amber += p[0] > 180 && p[1] > 130 && p[1] < p[0] && p[2] < 110;
+    }
+  return amber;
+}
+
+TEST(StudioHeadless, StatusBarNamesAPlantThatStoppedEarly) {
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
+  fs::path dir = scratchDir();
+  // Ivy by a wall, and ivy 1.5 m in front of it with nothing to climb.
+  auto scene = [](const char* second) {
+    return std::string(R"({"tendril": 1, "environment": {"obstacles": [
+        {"name": "ground", "type": "plane", "size": [4, 4]},
+        {"name": "wall", "type": "wall", "size": [2, 1.5, 0.1], "position": [0, 0, -0.05]}]},
+        "plants": [{"name": "by-the-wall", "position": [0, 0, 0.05]}, )") + second + "]}";
+  };
+  std::ofstream(dir / "lost.json") << scene(R"({"name": "lost", "position": [0.5, 0, 1.5]})");
+  std::ofstream(dir / "fine.json") << scene(R"({"name": "also-fine", "position": [-0.5, 0, 0.05]})");
+  std::string out, err;
+  ASSERT_EQ(runStudio(dir, quoted(dir / "lost.json") + " --frames 40 --size 1200x700 --screenshot " +
+                               quoted(dir / "lost.png"), true, &out, &err),
+            0)
+      << err;
+  EXPECT_NE(err.find("warning: plant \"lost\" stopped growing"), std::string::npos) << err;
+  EXPECT_NE(err.find("no support in reach"), std::string::npos) << err;
+  EXPECT_EQ(err.find("by-the-wall"), std::string::npos) << err;
+  const int amber = amberStatusPixels(io::readImage(dir / "lost.png"));
+  EXPECT_GT(amber, 200);
+  ASSERT_EQ(runStudio(dir, quoted(dir / "fine.json") + " --frames 40 --size 1200x700 --screenshot " +
+                               quoted(dir / "fine.png"), true, &out, &err),
+            0)
+      << err;
+  EXPECT_EQ(err.find("stopped growing"), std::string::npos) << err;
+  EXPECT_LT(amberStatusPixels(io::readImage(dir / "fine.png")), amber / 10);
+}
+
 TEST(StudioHeadless, SavedSessionReopensWhereItStopped) {
   if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
   fs::path dir = scratchDir();

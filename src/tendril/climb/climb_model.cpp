@@ -18,7 +18,7 @@ void readSpeciesDocument(const models::SpeciesDocument& d, ClimbSpecies& s) {
   o.finish();
 }
 
-class ClimbPlantSystem final : public models::PlantSystem {
+class ClimbPlantSystem final : public models::PlantSystem, public models::GrowthGauge {
  public:
   explicit ClimbPlantSystem(const models::SystemContext& c) : system_(c.sceneSeed, c.stepTime) {}
 
@@ -42,6 +42,11 @@ class ClimbPlantSystem final : public models::PlantSystem {
   void saveState(ArchiveWriter& out) const override { system_.saveState(out); }
   void loadState(ArchiveReader& in) override { system_.loadState(in); }
   void cut(size_t plant, uint32_t node) override { system_.cut(uint32_t(plant), node); }
+  const models::GrowthGauge* growthGauge() const override { return this; }
+  Reading growthReading(size_t plant) const override { return system_.growthReading(uint32_t(plant)); }
+  double unhinderedGrowth(size_t plant, uint32_t steps) const override {
+    return system_.unhinderedGrowth(uint32_t(plant), steps);
+  }
 
  private:
   ClimbSystem system_;

@@ -102,6 +102,7 @@ struct ClimbSystem::Outcome {
   int leafCount = 0;
   plant::PlantModel::LeafDef leaves[2];
   bool dies = false;
+  plant::TipEnd why = plant::TipEnd::Unknown;  // when it dies
   bool branch = false;
   Tip updated;
   Tip branchTip;
@@ -298,6 +299,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   t.unsupported = climbing ? 0 : t.unsupported + 1;
   if (s.maxUnsupported > 0 && t.unsupported > uint32_t(s.maxUnsupported)) {
     out.dies = true;  // too long without support: the shoot flops and dies
+    out.why = plant::TipEnd::NoSupport;
     return;
   }
 
@@ -328,6 +330,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
     t.leafThickness *= flow.leafThickness;
     if (t.length < s.minLength) {
       out.dies = true;
+      out.why = plant::TipEnd::Shortened;
       return;
     }
   }
@@ -337,6 +340,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   std::optional<Segment> segment = placeSegment(s, t, growDir, climbing, rng(kPurposeHold), env);
   if (!segment) {  // boxed in: nowhere to grow
     out.dies = true;
+    out.why = plant::TipEnd::Blocked;
     return;
   }
   const Vec3 end = segment->end, dir = segment->dir;
@@ -351,6 +355,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   int crowd = s.crowdingRadius > 0.0f ? occupancy_.countWithin(end, crowdingRadius, s.crowdingLimit) : 0;
   if (s.crowdingRadius > 0.0f && crowd >= s.crowdingLimit) {
     out.dies = true;  // the plant already covers this spot
+    out.why = plant::TipEnd::Crowded;
     return;
   }
 
@@ -399,12 +404,16 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
         t.radius *= s.decreaseRadius;
         t.length *= s.decreaseLength;
         t.leafSize *= s.decreaseLeafSize;
-        if (t.length < s.minLength) out.dies = true;
+        if (t.length < s.minLength) {
+          out.dies = true;
+          out.why = plant::TipEnd::Shortened;
+        }
         break;
       case RuleKind::CollisionAvoidance:
         break;  // applied to every segment as it is added (above)
       case RuleKind::Die:
         out.dies = true;
+        out.why = plant::TipEnd::Rule;
         break;
       case RuleKind::PlaceLeaf: {
         if (s.leafShapes.empty() || t.leafSize <= 0.0f) break;
@@ -473,7 +482,7 @@ void ClimbSystem::step(const env::Environment& env) {
     if (!p.capped && p.model.nodeCount() >= size_t(p.def.species.maxSegments)) {
       p.capped = true;
       for (const Tip& t : p.tips)
-        if (t.lastNode >= 0) p.model.flags[t.lastNode] |= plant::kNodeDead;
+        if (t.lastNode >= 0) p.model.flags[t.lastNode] = plant::deadEnd(p.model.flags[t.lastNode], plant::TipEnd::Capped);
       p.tips.clear();
       log::warn("plant \"{}\" reached max_segments ({}): growth stopped; raise the species' max_segments to grow "
                 "further",
@@ -500,7 +509,8 @@ void ClimbSystem::mergePlant(Plant& p, size_t k) {
       }
     }
     if (o.dies) {
-      if (nodeIndex >= 0) p.model.flags[nodeIndex] |= plant::kNodeDead;
+      if (nodeIndex >= 0) p.model.flags[nodeIndex] = plant::deadEnd(p.model.flags[nodeIndex], o.why);
+      else p.seedEnd = o.why;  // the seed's own tip, before its first segment
     } else {
       o.updated.lastNode = nodeIndex;
       next.push_back(o.updated);
@@ -512,6 +522,57 @@ void ClimbSystem::mergePlant(Plant& p, size_t k) {
     }
   }
   p.tips.swap(next);
+}
+
+namespace {
+
+// The length of stem a species' first shoot grows in `steps` steps with nothing in its way and
+// no wind: one segment a step, shortened by its decrease rules (at their mean rate), until it is
+// shorter than min_length or a certain die rule ends it.
+double unhinderedStemLength(const ClimbSpecies& s, uint32_t steps) {
+  double length = s.segmentLength, total = 0.0;
+  for (uint32_t k = 1; k <= steps; ++k) {
+    total += length;
+    bool dies = false;
+    for (const Rule& r : s.rules) {
+      if (k % uint32_t(r.every) != 0) continue;
+      if (r.kind == RuleKind::Decrease) {
+        length *= std::pow(double(s.decreaseLength), double(r.probability));
+        dies |= length < s.minLength;
+      } else if (r.kind == RuleKind::Die && r.probability >= 1.0f) {
+        dies = true;
+      }
+    }
+    if (dies) break;
+  }
+  return total;
+}
+
+}  // namespace
+
+models::GrowthGauge::Reading ClimbSystem::growthReading(uint32_t plant) const {
+  const Plant& p = *plants_.at(plant);
+  const ClimbSpecies& s = p.def.species;
+  models::GrowthGauge::Reading r;
+  r.growing = !p.tips.empty();
+  for (float l : p.model.length) r.grown += double(l);
+  // Its first segment grew in the step it was seeded in (a seed whose tip died at once has
+  // none: counted from the start).
+  const uint32_t born = p.birthStep.empty() ? 0 : p.birthStep.front();
+  r.steps = step_ - born;
+  r.lastGrowth = p.birthStep.empty() ? 0 : p.birthStep.back() - born + 1;
+  if (p.capped) r.cap = fmt::format("max_segments ({})", s.maxSegments);
+  r.seedEnd = p.seedEnd;
+  // A shoot grows max_unsupported segments before it must have a surface within adhesion distance.
+  if (s.maxUnsupported > 0) {
+    r.supportReach = s.adhesionDistance;
+    r.unsupportedRun = float(s.maxUnsupported) * s.segmentLength;
+  }
+  return r;
+}
+
+double ClimbSystem::unhinderedGrowth(uint32_t plant, uint32_t steps) const {
+  return unhinderedStemLength(plants_.at(plant)->def.species, steps);
 }
 
 bool ClimbSystem::finished() const {

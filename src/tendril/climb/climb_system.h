@@ -14,6 +14,7 @@
 #include "tendril/core/archive.h"
 #include "tendril/core/random.h"
 #include "tendril/env/environment.h"
+#include "tendril/models/capabilities.h"
 #include "tendril/plant/plant_model.h"
 
 #include <cstdint>
@@ -62,6 +63,10 @@ class ClimbSystem {
   plant::PlantModel snapshot(uint32_t plant) const;
   ClimbStats stats() const;
   ClimbStats stats(uint32_t plant) const;
+  // The plant's growth against its species' unhindered main stem (models/diagnosis.h).
+  models::GrowthGauge::Reading growthReading(uint32_t plant) const;
+  // The length of stem its species' first shoot grows in `steps` steps with nothing in its way.
+  double unhinderedGrowth(uint32_t plant, uint32_t steps) const;
 
   // Removes node `node` of the plant, everything beyond it, their leaves and their tips
   // (interactive cuts); the parent becomes a dead end if nothing else grows from it.
@@ -104,6 +109,9 @@ class ClimbSystem {
     std::vector<Tip> nextTips;  // scratch for the merge
     uint64_t nextTipId = 0;
     bool capped = false;
+    // Why the seed's own tip died before its first segment (diagnostics only; not saved: a
+    // loaded session finds the cause again from the scene).
+    plant::TipEnd seedEnd = plant::TipEnd::Unknown;
   };
   struct Outcome;
   struct TipRef {

@@ -12,7 +12,19 @@ namespace tendril::lsystem {
 
 namespace {
 
-class LSystemPlantSystem final : public models::PlantSystem {
+// How near a support must be to a grammar that asks the environment, and how far it grows
+// without one, for the diagnostics: seed 003's ivy's (its REACH of 0.08 m, MAXU of 6 segments
+// of 0.04 m). A grammar's own values are expressions in it that the gauge does not evaluate.
+constexpr float kQueryingSupportReach = 0.08f;
+constexpr float kQueryingUnsupportedRun = 0.24f;
+
+bool asksEnvironment(const Grammar& g) {
+  for (const ModuleInfo& m : g.modules)
+    if (m.op == TurtleOp::QueryEnvironment) return true;
+  return false;
+}
+
+class LSystemPlantSystem final : public models::PlantSystem, public models::GrowthGauge {
  public:
   explicit LSystemPlantSystem(const models::SystemContext& c) : context_(c) {}
 
@@ -21,6 +33,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
     plants_.push_back(start(spec, plants_.size(), env));
     names_.push_back(spec.name);
     growthFlow_.push_back(spec.paramsAs<LSystemParams>()->growthFlow);
+    lastGrowth_.push_back(0);
   }
 
   // A new grammar (or derivation length, placement...) for a growing plant: derived afresh
@@ -37,10 +50,17 @@ class LSystemPlantSystem final : public models::PlantSystem {
     plants_[plant] = std::move(ls);
     names_[plant] = spec.name;
     growthFlow_[plant] = spec.paramsAs<LSystemParams>()->growthFlow;
+    lastGrowth_[plant] = plants_[plant]->stepCount();
   }
 
   void step(const env::Environment& env) override {
-    for (auto& p : plants_) p->step(&env);
+    for (size_t i = 0; i < plants_.size(); ++i) {
+      LSystem& p = *plants_[i];
+      if (p.finished()) continue;
+      const size_t before = p.segmentModules();
+      p.step(&env);
+      if (p.segmentModules() > before) lastGrowth_[i] = p.stepCount();
+    }
   }
 
   bool finished() const override {
@@ -74,7 +94,34 @@ class LSystemPlantSystem final : public models::PlantSystem {
     const size_t at = in.position();
     if (in.u64() != plants_.size()) in.fail(at, "the saved L-system plants differ from the session's");
     for (auto& p : plants_) p->loadState(in);
+    // When they last grew is not saved: judged from now on.
+    for (size_t i = 0; i < plants_.size(); ++i) lastGrowth_[i] = plants_[i]->stepCount();
   }
+
+  // A grammar that asks the environment (?E) can be stopped by it (a climber with nothing to
+  // climb, a shoot boxed in); one that does not grows as written anywhere. What such a grammar
+  // would grow unhindered is not known (in an empty world a climber's grammar stops at once),
+  // so the diagnostics judge it by when it stopped: its string still being derived, but no
+  // segment added for kStallSteps steps.
+  static constexpr uint32_t kStallSteps = 10;
+  const models::GrowthGauge* growthGauge() const override { return this; }
+  Reading growthReading(size_t plant) const override {
+    const LSystem& ls = *plants_.at(plant);
+    Reading r;
+    r.unit = "segments";
+    r.grown = double(ls.segmentModules());
+    r.steps = ls.stepCount();
+    r.lastGrowth = std::min(lastGrowth_.at(plant), r.steps);
+    r.complete = ls.finished() || !asksEnvironment(ls.grammar());
+    r.growing = !ls.finished() && r.steps - r.lastGrowth < kStallSteps;
+    // Grammars that ask the environment mostly climb: support within this reach of the seed.
+    if (asksEnvironment(ls.grammar())) {
+      r.supportReach = kQueryingSupportReach;
+      r.unsupportedRun = kQueryingUnsupportedRun;
+    }
+    return r;
+  }
+  double unhinderedGrowth(size_t, uint32_t) const override { return 0.0; }
 
  private:
   std::unique_ptr<LSystem> start(const models::PlantSpec& spec, size_t id, const env::Environment& env) const {
@@ -102,6 +149,7 @@ class LSystemPlantSystem final : public models::PlantSystem {
   std::vector<std::unique_ptr<LSystem>> plants_;
   std::vector<std::string> names_;
   std::vector<plant::GrowthFlowSpecies> growthFlow_;
+  std::vector<uint32_t> lastGrowth_;  // per plant: the step in which its segment count last rose
 };
 
 std::shared_ptr<const models::ModelParams> readLSystemPlant(JsonObject& o, const std::filesystem::path& baseDir) {

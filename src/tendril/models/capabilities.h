@@ -1,5 +1,5 @@
 // What a growth model can do beyond growing, as interfaces a PlantSystem implements or not
-// (PlantSystem::grip(), branchSeeding(), strainGauge(), liveSettings(), airCoupling() return
+// (PlantSystem::grip(), branchSeeding(), strainGauge(), liveSettings(), airCoupling(), growthGauge() return
 // null for a model without that capability). The Session, the edits and the apps ask a plant's system for a
 // capability; they never name a model's own types. A new model gets dragging or the air's push
 // by implementing the interface.
@@ -7,6 +7,7 @@
 
 #include "tendril/core/math.h"
 #include "tendril/env/environment.h"
+#include "tendril/plant/plant_model.h"
 
 #include <cstdint>
 #include <limits>
@@ -103,6 +104,34 @@ class AirCoupling {
   virtual std::vector<Vec3>& airAcceleration() = 0;
   // The system's physics step (s): the air steps with it.
   virtual float airTimeStep() const = 0;
+};
+
+// Plants whose growth can be measured against what their species grows unhindered: how the
+// diagnostics (models/diagnosis.h) find a plant that stops in its first steps or stays far
+// below its species' size, and what they say about why.
+class GrowthGauge {
+ public:
+  virtual ~GrowthGauge() = default;
+  struct Reading {
+    bool growing = false;   // some tip of the plant still grows
+    bool complete = false;  // it has reached the end its settings give it (a derivation's length)
+    double grown = 0.0;     // what the plant has grown, in `unit`
+    const char* unit = "m of stem";
+    uint32_t steps = 0;       // growth steps since it was seeded
+    uint32_t lastGrowth = 0;  // the step (since seeded) in which it last grew
+    std::string cap;          // the cap that stopped it, e.g. "max_segments (500)"; empty if none
+    // Why the seed's own tip died before its first segment, where the model knows.
+    plant::TipEnd seedEnd = plant::TipEnd::Unknown;
+    // A climber that dies without support: how near its shoot a surface must be (m; 0 = it
+    // needs none), and how far a shoot grows without one before it dies (m).
+    float supportReach = 0.0f;
+    float unsupportedRun = 0.0f;
+    bool lightDriven = false;   // its growth rate follows the light it gets
+  };
+  virtual Reading growthReading(size_t plant) const = 0;
+  // What the plant's species grows in `steps` steps from its seed with nothing in its way (in
+  // the reading's unit), or 0 where the model cannot say.
+  virtual double unhinderedGrowth(size_t plant, uint32_t steps) const = 0;
 };
 
 }  // namespace tendril::models

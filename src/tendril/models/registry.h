@@ -70,6 +70,7 @@ class PlantSystem {
   virtual const StrainGauge* strainGauge() const { return nullptr; }
   virtual const LiveSettings* liveSettings() const { return nullptr; }
   virtual const AirCoupling* airCoupling() const { return nullptr; }
+  virtual const GrowthGauge* growthGauge() const { return nullptr; }
   Grip* grip() { return const_cast<Grip*>(std::as_const(*this).grip()); }
   BranchSeeding* branchSeeding() { return const_cast<BranchSeeding*>(std::as_const(*this).branchSeeding()); }
   StrainGauge* strainGauge() { return const_cast<StrainGauge*>(std::as_const(*this).strainGauge()); }

@@ -252,7 +252,8 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
   Plant& pl = plants_[plant_[i]];
   const ParticleSpecies& s = pl.species;
   if (u.dormant) {
-    flags_[i] &= ~kApex;
+    flags_[i] = (flags_[i] & ~(kApex | plant::kNodeTipEndMask)) |
+                (uint32_t(plant::TipEnd::Crowded) << plant::kNodeTipEndShift);
     return;
   }
   // Eq. 9: R = R R_g, R̄ = R̄ R⁻¹ R_g — the growth rotation enters the current and the rest
@@ -277,6 +278,7 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
                 "grow further",
                 pl.name, s.maxParticles);
     pl.capped = true;
+    flags_[i] = (flags_[i] & ~plant::kNodeTipEndMask) | (uint32_t(plant::TipEnd::Capped) << plant::kNodeTipEndShift);
     return;
   }
   // Growth-Flow (seed 001, Algorithm 1): each new internode is one unit of growth time. In a

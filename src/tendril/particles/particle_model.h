@@ -25,7 +25,8 @@ class ParticlePlantSystem final : public models::PlantSystem,
                                   public models::Grip,
                                   public models::BranchSeeding,
                                   public models::StrainGauge,
-                                  public models::LiveSettings {
+                                  public models::LiveSettings,
+                                  public models::GrowthGauge {
  public:
   explicit ParticlePlantSystem(const models::SystemContext& context);
   void addPlant(const models::PlantSpec& spec, const env::Environment& env) override;
@@ -47,6 +48,11 @@ class ParticlePlantSystem final : public models::PlantSystem,
   const models::StrainGauge* strainGauge() const override { return this; }
   const models::LiveSettings* liveSettings() const override { return this; }
   const models::AirCoupling* airCoupling() const override { return &world_; }
+  const models::GrowthGauge* growthGauge() const override { return this; }
+  Reading growthReading(size_t plant) const override { return world_.growthReading(uint32_t(plant)); }
+  double unhinderedGrowth(size_t plant, uint32_t steps) const override {
+    return world_.unhinderedGrowth(uint32_t(plant), steps);
+  }
   using models::PlantSystem::airCoupling, models::PlantSystem::branchSeeding, models::PlantSystem::grip,
       models::PlantSystem::liveSettings, models::PlantSystem::strainGauge;
 

@@ -180,6 +180,42 @@ void ParticleWorld::setSpecies(uint32_t plant, const ParticleSpecies& species) {
 
 size_t ParticleWorld::particleCount(uint32_t plant) const { return plants_.at(plant).particles; }
 
+bool ParticleWorld::hasBranchChild(uint32_t i) const {
+  for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c])
+    if (!(flags_[c] & kLeaf)) return true;
+  return false;
+}
+
+models::GrowthGauge::Reading ParticleWorld::growthReading(uint32_t plant) const {
+  const Plant& pl = plants_.at(plant);
+  const ParticleSpecies& s = pl.species;
+  models::GrowthGauge::Reading r;
+  float newest = 0.0f;  // age of its youngest stem particle
+  bool any = false;
+  for (uint32_t i = 0; i < capacity(); ++i) {
+    const uint32_t f = flags_[i];
+    if (!(f & kActive) || plant_[i] != plant || (f & (kLeaf | kDetached))) continue;
+    r.grown += 2.0 * double(a_[i]);
+    if ((f & kApex) && !pl.capped) r.growing = true;
+    newest = any ? std::min(newest, age_[i]) : age_[i];
+    any = true;
+  }
+  // The seed particle's age is the plant's.
+  const float age = pl.root != kNone && (flags_[pl.root] & kActive) ? age_[pl.root] : 0.0f;
+  const float dt = settings_.dt > 0.0f ? settings_.dt : 1.0f;
+  r.steps = uint32_t(std::lround(age / dt));
+  r.lastGrowth = uint32_t(std::lround((age - newest) / dt));
+  if (pl.capped) r.cap = fmt::format("max_particles ({})", s.maxParticles);
+  r.lightDriven = s.minGrowthLight < 1.0f;
+  return r;
+}
+
+double ParticleWorld::unhinderedGrowth(uint32_t plant, uint32_t steps) const {
+  // Its first apex lengthens at growth_rate per second of growth time in full light.
+  const ParticleSpecies& s = plants_.at(plant).species;
+  return double(s.growthRate) * double(s.growthSpeed) * double(settings_.dt) * double(steps);
+}
+
 float ParticleWorld::strain(uint32_t i) const {
   uint32_t p = parent_[i];
   if (p == kNone) return 0.0f;
@@ -385,6 +421,9 @@ plant::PlantModel ParticleWorld::snapshotFrom(uint32_t plantId, const SnapshotPa
       if (flags_[i] & kApex) d.flags |= plant::kNodeApex;
       if (flags_[i] & kAnchored) d.flags |= plant::kNodeAnchored;
       if (broken) d.flags |= plant::kNodeBroken;
+      // A tip that stopped (crowded, capped) and has grown nothing since: a dead end, and why.
+      if (plant::tipEnd(flags_[i]) != plant::TipEnd::Unknown && !hasBranchChild(i))
+        d.flags = plant::deadEnd(d.flags, plant::tipEnd(flags_[i]));
       if (parent_[i] != kNone && order_[i] > order_[parent_[i]]) d.flags |= plant::kNodeBranchStart;
       node[i] = m.addNode(d);
       // Children reversed on the stack, so they come out in creation order.

@@ -48,6 +48,7 @@ enum ParticleFlags : uint32_t {
   kDetached = 1u << 5,  // belongs to a piece that broke off
   kResting = 1u << 6,   // a fallen piece that has come to rest
   kAnchored = 1u << 7,  // held to a surface by an anchor
+  // Bits 8–11 (plant::kNodeTipEndMask): why a tip stopped (plant::TipEnd), as on snapshot nodes.
 };
 
 struct WorldSettings {
@@ -149,6 +150,9 @@ class ParticleWorld final : public models::AirCoupling {
   std::span<const float> masses() const { return m_; }
   // Strain of the connection to the parent: |d − d̄| / d̄ (0 for roots).
   float strain(uint32_t i) const;
+  // The plant's growth against its first apex's unhindered growth (models/diagnosis.h).
+  models::GrowthGauge::Reading growthReading(uint32_t plant) const;
+  double unhinderedGrowth(uint32_t plant, uint32_t steps) const;
   // The particle's tip ("head"): where its successor attaches.
   Vec3 head(uint32_t i) const { return x_[i] + q_[i] * Vec3(0, a_[i], 0); }
   const std::vector<AttachedLeaf>& attachedLeaves() const { return leaves_; }
@@ -191,6 +195,7 @@ class ParticleWorld final : public models::AirCoupling {
   // `node` (capacity() entries) receives the node index of every particle of the plant.
   plant::PlantModel snapshotFrom(uint32_t plant, const SnapshotParts& parts, std::vector<int32_t>& node) const;
 
+  bool hasBranchChild(uint32_t i) const;  // a child that is not a leaf particle
   uint32_t allocate();
   void release(uint32_t i);
   void link(uint32_t parent, uint32_t child);

@@ -31,6 +31,25 @@ enum NodeFlags : uint32_t {
   kNodeLeafNode = 1u << 6,     // carries leaves
 };
 
+// Why a branch's tip stopped growing, kept in bits 8–11 of its last node's flags next to
+// kNodeDead (models/diagnosis.h reports plants that stop early by these).
+enum class TipEnd : uint8_t {
+  Unknown = 0,  // not recorded (the model does not say, or the branch was cut)
+  NoSupport,    // a climbing shoot went too long without a support in reach
+  Blocked,      // obstacles left it nowhere to grow
+  Crowded,      // its own or other plants' stems already fill the space ahead
+  Capped,       // the plant reached a cap (max segments, max particles)
+  Shortened,    // its internodes became shorter than the species' minimum (wind, decrease)
+  Rule,         // the species' own rule ended it (a die rule)
+};
+inline constexpr uint32_t kNodeTipEndShift = 8;
+inline constexpr uint32_t kNodeTipEndMask = 0xFu << kNodeTipEndShift;
+inline TipEnd tipEnd(uint32_t flags) { return TipEnd((flags & kNodeTipEndMask) >> kNodeTipEndShift); }
+// `flags` as a dead end for `why` (an earlier recorded reason is replaced).
+inline uint32_t deadEnd(uint32_t flags, TipEnd why) {
+  return (flags & ~kNodeTipEndMask) | kNodeDead | (uint32_t(why) << kNodeTipEndShift);
+}
+
 // What a leaf shape id means: the texture drawn on the blade and its proportions.
 struct LeafShape {
   std::string texture;       // image path, or "builtin:<name>" for a generated texture

@@ -4,6 +4,7 @@
 #include "tendril/core/archive.h"
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
+#include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 #include "tendril/env/mesh_import.h"
 #include "tendril/models/stand_off.h"
@@ -165,6 +166,24 @@ void Session::run(uint32_t steps, const std::function<void(uint32_t)>& onStep) {
     step();
     if (onStep) onStep(i + 1);
   }
+  reportGrowth();
+}
+
+std::vector<Session::GrowthReport> Session::diagnoseGrowth() const {
+  std::vector<GrowthReport> out;
+  for (size_t i = 0; i < plants_.size(); ++i)
+    if (auto p = models::diagnoseGrowth(*systems_[plants_[i].system], plants_[i].index, specs_[i].spec, *env_))
+      out.push_back({i, std::move(*p)});
+  return out;
+}
+
+std::vector<Session::GrowthReport> Session::reportGrowth() {
+  std::vector<GrowthReport> found = diagnoseGrowth();
+  for (const GrowthReport& r : found)
+    // A model warns itself when a plant reaches a cap (max_segments, max_particles).
+    if (r.problem.cause != models::GrowthCause::Cap && reportedGrowth_.insert({r.plant, r.problem.cause}).second)
+      log::warn("{}", r.problem.message);
+  return found;
 }
 
 bool Session::finished() const {

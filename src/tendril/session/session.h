@@ -4,6 +4,7 @@
 
 #include "tendril/core/archive.h"
 #include "tendril/env/environment.h"
+#include "tendril/models/diagnosis.h"
 #include "tendril/models/registry.h"
 #include "tendril/plant/plant_model.h"
 #include "tendril/scene/scene.h"
@@ -15,6 +16,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <span>
 #include <string>
 #include <vector>
@@ -42,7 +44,7 @@ class Session {
   // One growth step of every plant.
   void step();
   // Up to `steps` steps, stopping early when nothing grows any more. `onStep(done)` is called
-  // after each step (progress reports).
+  // after each step (progress reports). Ends with reportGrowth().
   void run(uint32_t steps, const std::function<void(uint32_t)>& onStep = {});
   uint32_t stepCount() const { return steps_; }
   bool finished() const;
@@ -52,6 +54,18 @@ class Session {
   // The Growth-Flow constants of every plant, in scene order.
   std::vector<plant::GrowthFlowSpecies> growthFlow() const;
   size_t segmentCount() const;
+
+  // Plants that have stopped growing in their first steps or stay far below their species'
+  // size, and why (models/diagnosis.h), in plant order; none for healthy plants.
+  struct GrowthReport {
+    size_t plant = 0;
+    models::GrowthProblem problem;
+  };
+  std::vector<GrowthReport> diagnoseGrowth() const;
+  // diagnoseGrowth(), writing a warning for each problem not reported before (a plant is
+  // reported again only for another cause; a cap is left to the model's own warning). What
+  // run(), `tendril edit`, the Python module's grow and the studio call when growth stops.
+  std::vector<GrowthReport> reportGrowth();
 
   // --- plants at run time ---
   // Adds a plant now (any model). `description` is the plant as a scene-file plant object;
@@ -176,6 +190,7 @@ class Session {
   std::vector<Vec3> obstacleScales_;  // per obstacle, in environment order
   std::map<std::string, std::shared_ptr<const TriangleMesh>> meshCache_;  // resolved path -> mesh
   uint64_t obstacleRevision_ = 0;
+  std::set<std::pair<size_t, models::GrowthCause>> reportedGrowth_;  // (plant, cause) warned of
   uint32_t steps_ = 0;
   double airSeconds_ = 0.0;
   uint32_t airSteps_ = 0;
