@@ -9,6 +9,9 @@ find_package(TinyGLTF REQUIRED)
 find_package(spdlog REQUIRED)
 find_package(fmt REQUIRED)
 find_package(CLI11 REQUIRED)
+# Levels of detail: simplification and vertex cache / fetch ordering (Debian's package ships a
+# CMake config with the target meshoptimizer::meshoptimizer).
+find_package(meshoptimizer REQUIRED)
 find_package(Threads REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(MUPARSER REQUIRED IMPORTED_TARGET muparser)

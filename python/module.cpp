@@ -364,14 +364,22 @@ void exportFile(PySession& s, const std::string& path) {
   std::filesystem::path p(path);
   std::string ext = p.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  if (ext != ".glb" && ext != ".obj")
-    throw Error(path, "", "the file's extension says what to write: .glb or .obj");
+  std::string stem = p.stem().string(), format = ext.empty() ? ext : ext.substr(1);
+  // NAME.skeleton.json: the plant graph (io/skeleton_writer.h).
+  std::string stemExt = std::filesystem::path(stem).extension().string();
+  std::transform(stemExt.begin(), stemExt.end(), stemExt.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  if (ext == ".json" && stemExt == ".skeleton") {
+    stem = std::filesystem::path(stem).stem().string();
+    format = "skeleton";
+  } else if (ext != ".glb" && ext != ".obj") {
+    throw Error(path, "", "the file's extension says what to write: .skeleton.json, .glb or .obj");
+  }
   s.locked([&] {
     std::filesystem::path dir = p.parent_path().empty() ? std::filesystem::path(".") : p.parent_path();
     std::error_code ec;
     if (!std::filesystem::is_directory(dir, ec)) throw Error(path, "", fmt::format("directory {} does not exist", dir.string()));
     io::ExportScene written;
-    session::writePlantFiles(s.session(), dir, p.stem().string(), {ext.substr(1)}, s.source(), written);
+    session::writePlantFiles(s.session(), dir, stem, {format}, s.source(), written);
   });
 }
 
@@ -700,7 +708,8 @@ PYBIND11_MODULE(_tendril, m) {
            "Model.parts order ((n, 3) float32 arrays with the same vertices as at rest). `wind`, a scene's wind "
            "object (constant or gusty), moves the plants as grown in another wind than the scene's.")
       .def("export", &exportFile, py::arg("path"),
-           "Writes the plants as .glb or .obj (by the extension), byte for byte what `tendril grow` writes.")
+           "Writes the plants as .glb or .obj, or their skeletons as .skeleton.json (by the extension), byte for "
+           "byte what `tendril grow` writes.")
       .def("render", [](PySession& s, const std::string& path, int width, int height) {
         if (width < 16 || width > 8192 || height < 16 || height > 8192)
           throw Error(path, "", fmt::format("the picture must be 16 to 8192 pixels on a side, got {} x {}", width, height));

@@ -27,6 +27,7 @@ struct EditOptions {
   std::string save;
   std::string preview;
   std::string formats = "glb,obj";
+  LodOptions lod;
   CommonOptions common;
 };
 
@@ -50,6 +51,8 @@ int runEdit(const EditOptions& o) {
   } else {
     session = session::Session::open(o.input);
   }
+  scene::OutputSettings output = session->scene().output;  // with --lods, --lod-ratio
+  applyLodOptions(o.lod, output);
   std::filesystem::path outDir = prepareOutputDir(o.outDir);
 
   // Steps from the script's start: --steps, else the scene's "steps" (a scene) or just what the
@@ -72,7 +75,7 @@ int runEdit(const EditOptions& o) {
   session->reportGrowth();  // plants that stopped early, and why
 
   io::ExportScene exported;
-  std::vector<std::string> written = writePlantFiles(*session, outDir, "plant", formats, o.input, exported);
+  std::vector<std::string> written = writePlantFiles(*session, outDir, "plant", formats, o.input, exported, &output);
   if (!o.save.empty()) {
     session::saveSession(o.save, *session, editor.journal());
     written.push_back(o.save);
@@ -105,7 +108,9 @@ RegisterCommand registerEdit("edit",
       ->check(CLI::Range(0, 10000000));
   sub.add_option("--save", o->save, "Also write the session (.tses) to continue later");
   sub.add_option("--preview", o->preview, "Also render the result to this PNG (headless OpenGL)");
-  sub.add_option("--format", o->formats, "Comma-separated output formats: glb, obj")->capture_default_str();
+  sub.add_option("--format", o->formats, "Comma-separated output formats: glb, obj, skeleton (plant.skeleton.json)")
+      ->capture_default_str();
+  addLodOptions(sub, o->lod);
   addCommonOptions(sub, o->common);
   return [o] { return runEdit(*o); };
 });

@@ -36,6 +36,7 @@ struct GrowOptions {
   bool windFrames = false;      // also every frame of the clip as its own .glb
   double growthAnimation = 0.0; // seconds; > 0: plant-growth.glb, the plants growing as they move
   std::string formats = "glb,obj";
+  LodOptions lod;
   CommonOptions common;
 };
 
@@ -45,6 +46,7 @@ int runGrow(const GrowOptions& o) {
   scene::Scene scene = scene::loadScene(o.scene);
   if (o.steps >= 0) scene.steps = static_cast<int>(o.steps);
   if (o.seed >= 0) scene.seed = static_cast<uint64_t>(o.seed);
+  applyLodOptions(o.lod, scene.output);
   if (o.windFrames && !((o.windAnimation >= 0.0 ? float(o.windAnimation) : scene.output.animationSeconds) > 0.0f))
     throw Error("command line", "--wind-frames",
                 "needs a wind clip: --wind-animation SECONDS or the scene's output.wind_animation");
@@ -149,7 +151,9 @@ RegisterCommand registerGrow("grow", "Grow every plant of a scene and write the 
                  "Also write plant-growth.glb: a clip of this many seconds of the plants growing while they move "
                  "in the scene's wind (0 = none)")
       ->check(CLI::Range(0.0, 600.0));
-  sub.add_option("--format", o->formats, "Comma-separated output formats: glb, obj")->capture_default_str();
+  sub.add_option("--format", o->formats, "Comma-separated output formats: glb, obj, skeleton (plant.skeleton.json)")
+      ->capture_default_str();
+  addLodOptions(sub, o->lod);
   addCommonOptions(sub, o->common);
   return [o] { return runGrow(*o); };
 });

@@ -3,6 +3,7 @@
 // Session, so a scene holding the same plant grows the same one. Errors inside the grammar print
 // the one-line error and, under it, the grammar line with a caret at the column.
 #include "commands.h"
+#include "plant_output.h"
 
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
@@ -18,6 +19,7 @@
 #include "tendril/session/session.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -37,6 +39,8 @@ struct LsysOptions {
   std::string heading;
   bool print = false;
   int radialSegments = 0;  // 0: the scene's output.radial_segments (8 without a scene)
+  std::string formats;     // empty: the output's extension
+  LodOptions lod;
   CommonOptions common;
 };
 
@@ -81,6 +85,9 @@ int runLsys(const LsysOptions& o) {
   std::string ext = out.extension().string();
   if (ext != ".glb" && ext != ".obj")
     throw Error("command line", "-o", fmt::format("the output must end in .glb or .obj, got \"{}\"", o.output));
+  // --format writes each format beside the output, named after its stem.
+  const std::set<std::string> formats = o.formats.empty() ? std::set<std::string>{ext.substr(1)} : parseFormats(o.formats);
+  const std::filesystem::path outDir = out.parent_path().empty() ? std::filesystem::path(".") : out.parent_path();
 
   lsystem::CompileOptions compile;
   for (const std::string& d : o.defines) compile.defines.push_back(parseDefine(d));
@@ -108,6 +115,7 @@ int runLsys(const LsysOptions& o) {
   const int steps = length.value_or(grammar->derivationLength);
   scene::Scene sc = scene::onePlantScene(lsystem::lsystemPlant(std::move(plant), grammar, length), steps, base);
   if (o.radialSegments > 0) sc.output.radialSegments = o.radialSegments;
+  applyLodOptions(o.lod, sc.output);
   const std::string sceneSource = sc.source;
   std::unique_ptr<session::Session> session;
   try {
@@ -127,10 +135,9 @@ int runLsys(const LsysOptions& o) {
   const lsystem::LSystem& ls = *derivation();
   if (o.print) std::cout << ls.text() << "\n";
 
-  const io::ExportScene exportScene = session::exportScene(*session, grammar->source);
-  const io::ExportOptions options = session::exportOptions(session->scene().output);
-  if (ext == ".glb") io::writeGlb(exportScene, out, options);
-  else io::writeObj(exportScene, out, options);
+  io::ExportScene exportScene;
+  const std::vector<std::string> written =
+      writePlantFiles(*session, outDir, out.stem().string(), formats, grammar->source, exportScene);
 
   if (!o.common.quiet) {
     const plant::PlantModel& p = exportScene.plants[0];
@@ -138,7 +145,7 @@ int runLsys(const LsysOptions& o) {
     log::info("{}: {} steps, {} modules; {} segments, {} leaves, {} polygon meshes (derivation {:.2f} s, total "
               "{:.2f} s); wrote {}",
               p.name, ls.stepCount(), ls.string().size(), s.nodes, s.leaves, p.meshes.size(), deriveSeconds,
-              total.seconds(), out.string());
+              total.seconds(), fmt::join(written, ", "));
   }
   return 0;
 }
@@ -158,9 +165,13 @@ RegisterCommand registerLsys("lsys", "Derive an L-system grammar and write the p
   sub.add_option("--at", o->at, "Where the plant stands, x,y,z (m); default 0,0,0");
   sub.add_option("--heading", o->heading, "The turtle's first heading, x,y,z; default 0,1,0 (up)");
   sub.add_flag("--print", o->print, "Print the derived string");
+  sub.add_option("--format", o->formats,
+                 "Comma-separated formats to write beside OUT, named after its stem: glb, obj, skeleton "
+                 "(default: OUT's extension)");
   sub.add_option("--radial-segments", o->radialSegments,
                  "Vertices around each branch (overrides the scene's output.radial_segments; default 8)")
       ->check(CLI::Range(3, 64));
+  addLodOptions(sub, o->lod);
   addCommonOptions(sub, o->common);
   return [o]() -> int {
     try {

@@ -3,6 +3,7 @@
 // (scene/one_plant_scene.h) through a Session, so a scene holding the same plant gives the same
 // one.
 #include "commands.h"
+#include "plant_output.h"
 
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
@@ -13,11 +14,13 @@
 #include "tendril/io/export_model.h"
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
+#include "tendril/io/skeleton_writer.h"
 #include "tendril/scene/one_plant_scene.h"
 #include "tendril/session/plant_export.h"
 #include "tendril/session/session.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <filesystem>
 
@@ -31,6 +34,8 @@ struct ModelOptions {
   std::vector<std::string> overrides;
   int radialSegments = 8;
   int subdivisions = 3;
+  std::string formats;  // empty: the output's extension
+  LodOptions lod;
   CommonOptions common;
 };
 
@@ -41,6 +46,11 @@ int runModel(const ModelOptions& o) {
   if (ext != ".glb" && ext != ".obj")
     throw Error("command line", "-o", fmt::format("the output must end in .glb or .obj, got \"{}\"", o.output));
   io::checkOutputPath(out);
+  // --format writes each format beside the output, named after its stem.
+  const std::set<std::string> formats = o.formats.empty() ? std::set<std::string>{ext.substr(1)} : parseFormats(o.formats);
+  const std::filesystem::path outDir = out.parent_path().empty() ? std::filesystem::path(".") : out.parent_path();
+  auto file = [&](const char* extension) { return outDir / (out.stem().string() + extension); };
+  std::vector<std::string> written;
   std::vector<graph::Override> overrides;
   for (const std::string& s : o.overrides) overrides.push_back(graph::parseOverride(s, "command line", "--set"));
 
@@ -56,16 +66,25 @@ int runModel(const ModelOptions& o) {
   scene::Scene sc = scene::onePlantScene(graph::graphPlant(std::move(plant), g), 0);
   sc.output.radialSegments = o.radialSegments;
   sc.output.subdivisions = o.subdivisions;
+  applyLodOptions(o.lod, sc.output);
   session::Session session(std::move(sc));
   double generateSeconds = phase.seconds();
   phase.reset();
   const io::ExportScene scene = session::exportScene(session, g->source);
   // Meshed once: the triangle count is reported, and both writers take the meshes.
   io::ExportModel model = io::buildExportModel(scene, session::exportOptions(session.scene().output));
-  if (ext == ".glb")
-    io::writeGlb(model, out);
-  else
-    io::writeObj(model, out);
+  if (formats.count("glb")) {
+    io::writeGlb(model, file(".glb"));
+    written.push_back(file(".glb").string());
+  }
+  if (formats.count("obj")) {
+    io::writeObj(model, file(".obj"));
+    written.push_back(file(".obj").string());
+  }
+  if (formats.count("skeleton")) {
+    io::writeSkeleton(scene.plants, file(".skeleton.json"));
+    written.push_back(file(".skeleton.json").string());
+  }
   double exportSeconds = phase.seconds();
 
   if (!o.common.quiet) {
@@ -75,7 +94,7 @@ int runModel(const ModelOptions& o) {
     log::info("{}: {} instances, {} skeleton segments, {} leaves, {} primitives, {} triangles", g->name,
               session.plantSpec(0).paramsAs<graph::GraphPlantParams>()->instances, p.nodeCount(), p.leafCount(), p.primitives.size(), triangles);
     log::info("expand + geometry {:.3f} s, mesh + export {:.3f} s (total {:.3f} s); wrote {}", generateSeconds,
-              exportSeconds, total.seconds(), out.string());
+              exportSeconds, total.seconds(), fmt::join(written, ", "));
   }
   return 0;
 }
@@ -95,6 +114,10 @@ RegisterCommand registerModel("model", "Build a plant from a component graph (Xf
   sub.add_option("--subdivisions", o->subdivisions, "Spline samples per stem segment")
       ->check(CLI::Range(1, 16))
       ->capture_default_str();
+  sub.add_option("--format", o->formats,
+                 "Comma-separated formats to write beside OUT, named after its stem: glb, obj, skeleton "
+                 "(default: OUT's extension)");
+  addLodOptions(sub, o->lod);
   addCommonOptions(sub, o->common);
   return [o] { return runModel(*o); };
 });

@@ -12,8 +12,9 @@ std::set<std::string> parseFormats(const std::string& list) {
   while (start <= list.size()) {
     size_t comma = list.find(',', start);
     std::string f = list.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
-    if (f != "glb" && f != "obj")
-      throw Error("command line", "--format", fmt::format("unknown format \"{}\" (expected glb, obj or glb,obj)", f));
+    if (f != "glb" && f != "obj" && f != "skeleton")
+      throw Error("command line", "--format",
+                  fmt::format("unknown format \"{}\" (expected glb, obj, skeleton or a comma-separated list of them)", f));
     out.insert(f);
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -29,6 +30,30 @@ std::filesystem::path prepareOutputDir(const std::string& dir) {
   std::filesystem::create_directories(p, ec);
   if (ec) throw Error("command line", "-o", fmt::format("cannot create directory {}: {}", dir, ec.message()));
   return p;
+}
+
+void addLodOptions(CLI::App& sub, LodOptions& options) {
+  sub.add_option("--lods", options.lods,
+                 "Levels of detail per plant, LOD0 included (overrides the scene's output.lods; 1 = none): "
+                 "MSFT_lod nodes <plant>_LOD<k> in .glb, <stem>_LOD<k>.obj files")
+      ->check(CLI::Range(1, 8));
+  sub.add_option("--lod-ratio", options.ratio,
+                 "Triangle budget of LODk: LOD0's triangles x ratio^k (overrides the scene's output.lod_ratio and "
+                 "lod_triangles; default 0.5)")
+      ->check(CLI::Range(0.01, 1.0));
+}
+
+void applyLodOptions(const LodOptions& options, scene::OutputSettings& output) {
+  if (options.lods > 0) {
+    output.lods = options.lods;
+    output.lodTriangles.clear();
+  }
+  if (options.ratio > 0.0) {
+    if (output.lods <= 1)
+      throw Error("command line", "--lod-ratio", "needs levels of detail: give --lods N (N >= 2) or the scene's output.lods");
+    output.lodRatio = float(options.ratio);
+    output.lodTriangles.clear();
+  }
 }
 
 }  // namespace tendril::cli

@@ -7,6 +7,8 @@
 #include "tendril/session/plant_export.h"
 #include "tendril/session/session.h"
 
+#include <CLI/CLI.hpp>
+
 #include <filesystem>
 #include <set>
 #include <string>
@@ -14,10 +16,23 @@
 
 namespace tendril::cli {
 
-// "glb,obj" → {"glb", "obj"}; anything else is an Error naming --format.
+// "glb,obj,skeleton" → {"glb", "obj", "skeleton"} (any of them, comma-separated); anything else
+// is an Error naming --format.
 std::set<std::string> parseFormats(const std::string& list);
 // Creates the directory if missing; an Error naming -o if it cannot be.
 std::filesystem::path prepareOutputDir(const std::string& dir);
+
+// --lods N and --lod-ratio R (grow, edit, lsys, model): levels of detail per plant, overriding
+// the scene's output.lods / lod_ratio; either one replaces output.lod_triangles by the ratio's
+// budgets. 0 = not given.
+struct LodOptions {
+  int lods = 0;
+  double ratio = 0.0;
+};
+void addLodOptions(CLI::App& sub, LodOptions& options);
+// Applies the options to `output`; --lod-ratio without levels of detail (from --lods or the
+// scene) is an Error naming it.
+void applyLodOptions(const LodOptions& options, scene::OutputSettings& output);
 
 // Shared with the Python module: session::writePlantFiles (session/plant_export.h) and
 // render::writePreview (render/session_render.h).

@@ -46,13 +46,19 @@ def wall_scene(steps=40, model="climb", species="japanese-ivy", seed=3):
 
 def test_default_scene_grows_what_the_cli_grows(tmp_path):
     cli_out = tmp_path / "cli"
-    subprocess.run([CLI, "grow", str(SCENES / "default.json"), "-o", str(cli_out), "--format", "glb", "--quiet"],
-                   check=True)
+    subprocess.run([CLI, "grow", str(SCENES / "default.json"), "-o", str(cli_out), "--format", "glb,skeleton",
+                    "--quiet"], check=True)
     s = tendril.Session.open(str(SCENES / "default.json"))
     steps = s.run()
     assert steps > 0 and s.segment_count > 1000
     s.export(str(tmp_path / "py.glb"))
     assert sha(tmp_path / "py.glb") == sha(cli_out / "plant.glb")
+    # The plant graph (docs/skeleton-format.md), named by its extension.
+    s.export(str(tmp_path / "py.skeleton.json"))
+    assert sha(tmp_path / "py.skeleton.json") == sha(cli_out / "plant.skeleton.json")
+    skeleton = json.loads((tmp_path / "py.skeleton.json").read_text())
+    assert skeleton["format"] == "tendril-skeleton" and skeleton["version"] == 1
+    assert [len(p["nodes"]) for p in skeleton["plants"]] == [s.plant(i).positions.shape[0] for i in range(2)]
 
 
 def test_results_do_not_depend_on_the_thread_count():

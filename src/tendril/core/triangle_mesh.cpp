@@ -7,6 +7,7 @@ void TriangleMesh::append(const TriangleMesh& o) {
   bool wasEmpty = positions.empty();
   bool keepNormals = !o.normals.empty() && (wasEmpty || !normals.empty());
   bool keepUvs = !o.uvs.empty() && (wasEmpty || !uvs.empty());
+  bool keepNodeIds = !o.nodeIds.empty() && (wasEmpty || !nodeIds.empty());
   uint32_t base = static_cast<uint32_t>(positions.size());
   positions.insert(positions.end(), o.positions.begin(), o.positions.end());
   if (keepNormals)
@@ -17,6 +18,10 @@ void TriangleMesh::append(const TriangleMesh& o) {
     uvs.insert(uvs.end(), o.uvs.begin(), o.uvs.end());
   else
     uvs.clear();
+  if (keepNodeIds)
+    nodeIds.insert(nodeIds.end(), o.nodeIds.begin(), o.nodeIds.end());
+  else
+    nodeIds.clear();
   indices.reserve(indices.size() + o.indices.size());
   for (uint32_t i : o.indices) indices.push_back(base + i);
 }

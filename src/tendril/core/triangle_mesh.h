@@ -15,6 +15,9 @@ struct TriangleMesh {
   std::vector<Vec3> normals;  // empty, or one unit normal per position
   std::vector<Vec2> uvs;      // empty, or one per position
   std::vector<uint32_t> indices;
+  // Empty, or one per position: the plant skeleton node the vertex was built from (plant
+  // meshes, mesh/plant_mesh.h; the .glb's _NODE_ID).
+  std::vector<uint32_t> nodeIds;
 
   size_t vertexCount() const { return positions.size(); }
   size_t triangleCount() const { return indices.size() / 3; }
@@ -24,6 +27,7 @@ struct TriangleMesh {
     normals.clear();
     uvs.clear();
     indices.clear();
+    nodeIds.clear();
   }
   Bounds3 bounds() const {
     Bounds3 b;

@@ -1,6 +1,7 @@
 #include "tendril/io/export_model.h"
 
 #include "tendril/core/error.h"
+#include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 
 #include <fmt/format.h>
@@ -125,6 +126,45 @@ TriangleMesh preparedMesh(const NamedMesh& named) {
 
 }  // namespace
 
+std::string levelName(const ExportObject& object, size_t level) {
+  return object.lods.empty() ? object.name : fmt::format("{}_LOD{}", object.name, level);
+}
+
+void meshPlantLevels(const plant::PlantModel& plant, const ExportOptions& options, mesh::PlantMesh& mesh,
+                     std::vector<mesh::LodLevel>& lods) {
+  mesh::buildPlantMesh(plant, options.mesh, mesh);
+  if (options.lods.levels <= 1 || mesh.triangleCount() == 0) {
+    lods.clear();
+    return;
+  }
+  mesh::buildLods(plant, options.mesh, mesh, options.lods, lods);
+  mesh::optimizeMeshOrder(mesh);
+}
+
+std::vector<std::string> lodBudgetWarnings(const plant::PlantModel& plant, size_t index,
+                                           const std::vector<mesh::LodLevel>& lods) {
+  std::vector<std::string> warnings;
+  for (size_t k = 0; k < lods.size(); ++k)
+    if (lods[k].overBudget())
+      warnings.push_back(fmt::format(
+          "plant \"{}\": LOD{} has {} triangles, over its budget of {} (the fewest it could be brought to, with {} "
+          "leaves and {} radial segments; written as it is)",
+          plant.name.empty() ? fmt::format("plant-{}", index) : plant.name, k + 1, lods[k].triangles, lods[k].budget,
+          lods[k].leaves, lods[k].options.radialSegments));
+  return warnings;
+}
+
+PlantParts plantParts(const mesh::PlantMesh& mesh, const std::vector<mesh::LodLevel>& lods) {
+  PlantParts parts = plantParts(mesh);
+  if (lods.empty()) return parts;
+  parts.levelTriangles.push_back(mesh.triangleCount());
+  for (const mesh::LodLevel& level : lods) {
+    parts.lods.push_back(plantParts(level.mesh));
+    parts.levelTriangles.push_back(level.triangles);
+  }
+  return parts;
+}
+
 PlantParts plantParts(const mesh::PlantMesh& mesh) {
   PlantParts parts;
   parts.bark = !mesh.bark.empty();
@@ -205,6 +245,18 @@ ExportModel assembleExportModel(const ExportScene& scene, const std::vector<Plan
       std::string name = m.name;
       object.parts.push_back({name, nullptr, builder.material(std::move(m)), PartSource::Primitive, uint32_t(k)});
     }
+    // Lower levels: the parts of LOD0 that still have triangles there, with LOD0's materials.
+    for (const PlantParts& level : pm.lods) {
+      std::vector<ExportPart>& lodParts = object.lods.emplace_back();
+      for (const ExportPart& part : object.parts) {
+        const bool has = part.source == PartSource::Bark     ? level.bark
+                         : part.source == PartSource::Leaves ? part.index < level.leaves.size() && level.leaves[part.index]
+                                                             : part.index < level.primitiveTriangles.size() &&
+                                                                   level.primitiveTriangles[part.index];
+        if (has) lodParts.push_back(part);
+      }
+    }
+    if (!pm.lods.empty()) object.screenCoverage = mesh::lodScreenCoverage(pm.levelTriangles);
     model.objects.push_back(std::move(object));
   }
   for (size_t i = 0; i < scene.meshes.size(); ++i) {
@@ -227,7 +279,9 @@ ExportModel assembleExportModel(const ExportScene& scene, const std::vector<Plan
 ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& options) {
   // Textures load (or are generated) while the plants are meshed: both take a while for a
   // large scene and neither needs the other.
+  mesh::validateLodSettings(options.lods, "export options");
   std::vector<mesh::PlantMesh> meshes;
+  std::vector<std::vector<mesh::LodLevel>> lods;
   TexturePreload textures;
   tbb::parallel_invoke(
       [&] {
@@ -237,10 +291,11 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
         // the one reported, as when they were meshed in order.
         const size_t n = scene.plants.size();
         meshes.resize(n);
+        lods.resize(n);
         std::vector<std::exception_ptr> meshFailed(n);
         parallelFor(0, n, [&](size_t i) {
           try {
-            meshes[i] = mesh::buildPlantMesh(scene.plants[i], options.mesh);
+            meshPlantLevels(scene.plants[i], options, meshes[i], lods[i]);
           } catch (...) {
             meshFailed[i] = std::current_exception();
           }
@@ -251,16 +306,24 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       [&] { textures = preloadTextures(scene); });
   std::vector<PlantParts> parts;
   parts.reserve(meshes.size());
-  for (const mesh::PlantMesh& m : meshes) parts.push_back(plantParts(m));
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    parts.push_back(plantParts(meshes[i], lods[i]));
+    for (const std::string& w : lodBudgetWarnings(scene.plants[i], i, lods[i])) log::warn("{}", w);
+  }
   ExportModel model = assembleExportModel(scene, parts, textures);
   model.plantMeshes = std::move(meshes);
-  for (size_t i = 0; i < scene.plants.size(); ++i)
-    for (ExportPart& part : model.objects[i].parts) {
-      const mesh::PlantMesh& pm = model.plantMeshes[i];
-      part.mesh = part.source == PartSource::Bark     ? &pm.bark
-                  : part.source == PartSource::Leaves ? &pm.leaves[part.index]
-                                                      : &pm.primitives[part.index].mesh;
-    }
+  model.plantLods = std::move(lods);
+  auto meshOf = [](const mesh::PlantMesh& pm, const ExportPart& part) {
+    return part.source == PartSource::Bark     ? &pm.bark
+           : part.source == PartSource::Leaves ? &pm.leaves[part.index]
+                                               : &pm.primitives[part.index].mesh;
+  };
+  for (size_t i = 0; i < scene.plants.size(); ++i) {
+    ExportObject& object = model.objects[i];
+    for (ExportPart& part : object.parts) part.mesh = meshOf(model.plantMeshes[i], part);
+    for (size_t k = 0; k < object.lods.size(); ++k)
+      for (ExportPart& part : object.lods[k]) part.mesh = meshOf(model.plantLods[i][k].mesh, part);
+  }
   return model;
 }
 

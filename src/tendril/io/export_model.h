@@ -51,7 +51,19 @@ struct ExportPart {
 struct ExportObject {
   std::string name;  // the plant's (or extra mesh's) name
   std::vector<ExportPart> parts;
+  // A plant written with levels of detail: the parts of LOD1, LOD2, ... (each a subset of
+  // `parts`, with the same materials) and, per level from LOD0, the screen coverage below which
+  // it gives way to the next (mesh::lodScreenCoverage). Empty without a LOD chain.
+  std::vector<std::vector<ExportPart>> lods;
+  std::vector<float> screenCoverage;
+
+  size_t levels() const { return 1 + lods.size(); }
+  const std::vector<ExportPart>& partsOf(size_t level) const { return level == 0 ? parts : lods[level - 1]; }
 };
+
+// The name of an object's level: "<name>_LOD<level>" when it has levels of detail (what game
+// engines' importers look for), else its name.
+std::string levelName(const ExportObject& object, size_t level);
 
 // Parts point into the model's own meshes: move it, do not copy it.
 struct ExportModel {
@@ -62,6 +74,7 @@ struct ExportModel {
   ExportModel& operator=(const ExportModel&) = delete;
 
   std::vector<mesh::PlantMesh> plantMeshes;  // one per scene plant
+  std::vector<std::vector<mesh::LodLevel>> plantLods;  // per scene plant: LOD1, LOD2, ... (none without a chain)
   std::vector<TriangleMesh> extraMeshes;     // scene meshes with normals ensured
   std::vector<ExportObject> objects;         // plants, then extra meshes
   std::vector<ExportMaterial> materials;
@@ -69,8 +82,19 @@ struct ExportModel {
   std::vector<ExportImage> images;
 };
 
-// Throws Error for invalid plants or options and for textures that cannot be read.
+// Throws Error for invalid plants or options and for textures that cannot be read. Levels
+// over their triangle budget are warned about (lodBudgetWarnings).
 ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& options);
+
+// Meshes one plant as the exporters do: LOD0 into `mesh` and, with a LOD chain, its lower levels
+// into `lods` (then every level in vertex cache and fetch order).
+void meshPlantLevels(const plant::PlantModel& plant, const ExportOptions& options, mesh::PlantMesh& mesh,
+                     std::vector<mesh::LodLevel>& lods);
+// A warning for each level of plant `index` over its triangle budget (such a level is written
+// with the fewest triangles reached); the exporters log them, in plant order, on the calling
+// thread.
+std::vector<std::string> lodBudgetWarnings(const plant::PlantModel& plant, size_t index,
+                                           const std::vector<mesh::LodLevel>& lods);
 
 // What the objects, parts and materials depend on of a plant's meshes: which parts have
 // triangles (their geometry is not needed).
@@ -79,8 +103,12 @@ struct PlantParts {
   std::vector<uint8_t> leaves;                   // per leaf shape id: 1 if it has triangles
   std::vector<mesh::PrimitiveGroup> primitives;  // name, colour and texture (meshes left empty)
   std::vector<uint8_t> primitiveTriangles;       // per group: 1 if it has triangles
+  // With levels of detail: the same of LOD1, LOD2, ... and every level's triangle count.
+  std::vector<PlantParts> lods;
+  std::vector<size_t> levelTriangles;
 };
 PlantParts plantParts(const mesh::PlantMesh& mesh);
+PlantParts plantParts(const mesh::PlantMesh& mesh, const std::vector<mesh::LodLevel>& lods);
 
 // The textures a scene's plants use, loaded in parallel ahead of the model that needs them; a
 // texture that fails is reported when a part first uses it.

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "tendril/core/triangle_mesh.h"
+#include "tendril/mesh/lod.h"
 #include "tendril/mesh/mesh_options.h"
 #include "tendril/plant/plant_model.h"
 
@@ -24,6 +25,9 @@ struct ExportScene {
 
 struct ExportOptions {
   mesh::MeshOptions mesh;
+  // Levels of detail per plant (mesh/lod.h); with more than one, every level (LOD0 too) is
+  // written in vertex cache and fetch order.
+  mesh::LodSettings lods;
 };
 
 inline ExportOptions defaultExportOptions() { return {}; }

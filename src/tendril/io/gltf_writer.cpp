@@ -1,6 +1,7 @@
 #include "tendril/io/gltf_writer.h"
 
 #include "tendril/core/error.h"
+#include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 #include "tendril/io/atomic_file.h"
 
@@ -13,6 +14,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <optional>
@@ -29,12 +31,16 @@ static_assert(std::endian::native == std::endian::little, "the .glb writer assum
 
 // The content of one buffer view; views are written in offset order.
 struct CopyJob {
-  enum class Kind { Bytes, FlipUv, Index16 };
+  enum class Kind { Bytes, FlipUv, Index16, NodeId };
   Kind kind = Kind::Bytes;
   const void* source = nullptr;
-  size_t count = 0;   // bytes (Bytes), uvs (FlipUv) or indices (Index16)
+  size_t count = 0;   // bytes (Bytes), uvs (FlipUv), indices (Index16) or node ids (NodeId)
   size_t offset = 0;  // in the buffer
 };
+
+// Node ids are written as floats (glTF forbids unsigned int for application-specific
+// attributes), exact integers below 2^24.
+constexpr uint32_t kMaxNodeId = (uint32_t(1) << 24) - 1;
 
 size_t align4(size_t n) { return (n + 3) & ~size_t(3); }
 
@@ -72,6 +78,21 @@ void writeJob(const CopyJob& job, AtomicFileWriter& out, std::vector<uint8_t>& s
         uint16_t* o = reinterpret_cast<uint16_t*>(scratch.data());
         for (size_t i = 0; i < n; ++i) o[i] = static_cast<uint16_t>(idx[b + i]);
         out.write(scratch.data(), n * sizeof(uint16_t));
+      }
+      return;
+    }
+    case CopyJob::Kind::NodeId: {
+      const uint32_t* id = static_cast<const uint32_t*>(job.source);
+      for (size_t b = 0; b < job.count; b += kBlock) {
+        size_t n = std::min(kBlock, job.count - b);
+        float* f = reinterpret_cast<float*>(scratch.data());
+        for (size_t i = 0; i < n; ++i) {
+          if (id[b + i] > kMaxNodeId)
+            throw Error(out.path().string(), "", fmt::format("cannot write .glb: node id {} does not fit _NODE_ID "
+                                                             "(a float, exact up to {})", id[b + i], kMaxNodeId));
+          f[i] = static_cast<float>(id[b + i]);
+        }
+        out.write(scratch.data(), n * sizeof(float));
       }
       return;
     }
@@ -131,17 +152,19 @@ struct PartGeometry {
   size_t vertices = 0, indices = 0;
   bool normals = false, uvs = false;
   Bounds3 bounds;
+  bool nodeIds = false;
 };
 
 PartGeometry geometryOf(const TriangleMesh& m) {
-  return {m.positions.size(), m.indices.size(), !m.normals.empty(), !m.uvs.empty(), parallelBounds(m.positions)};
+  return {m.positions.size(), m.indices.size(), !m.normals.empty(), !m.uvs.empty(), parallelBounds(m.positions),
+          !m.nodeIds.empty()};
 }
 
 // uint16 indices when they fit; 65535 itself is the primitive-restart value and not allowed.
 bool smallIndices(size_t vertices) { return vertices < 65536; }
 
 // The part's views and accessors, in the order its bytes are written: positions, normals,
-// uvs, indices. With `mesh`, the copy jobs that write them.
+// uvs, node ids, indices. With `mesh`, the copy jobs that write them.
 tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBuilder& b, tinygltf::Model& gltf,
                             const TriangleMesh* mesh, std::vector<CopyJob>* jobs) {
   const size_t n = g.vertices;
@@ -165,6 +188,11 @@ tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBu
     int tv = b.view(n * sizeof(Vec2), kArrayBuffer);
     prim.attributes["TEXCOORD_0"] = b.accessor(tv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, n);
     if (mesh) jobs->push_back({CopyJob::Kind::FlipUv, mesh->uvs.data(), n, b.offsetOf(tv)});
+  }
+  if (g.nodeIds) {
+    int iv = b.view(n * sizeof(float), kArrayBuffer);
+    prim.attributes["_NODE_ID"] = b.accessor(iv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, n);
+    if (mesh) jobs->push_back({CopyJob::Kind::NodeId, mesh->nodeIds.data(), n, b.offsetOf(iv)});
   }
   const bool small = smallIndices(n);
   const size_t ni = g.indices;
@@ -236,20 +264,34 @@ void describe(const ExportModel& model, Geometry&& geometry, const std::vector<s
   scene.name = "Tendril";  // also keeps an empty scene an object rather than null
   for (size_t o = 0; o < model.objects.size(); ++o) {
     const ExportObject& object = model.objects[o];
-    tinygltf::Node node;
-    node.name = object.name;
-    if (!object.parts.empty()) {
-      tinygltf::Mesh mesh;
-      mesh.name = object.name;
-      for (size_t p = 0; p < object.parts.size(); ++p) {
-        const ExportPart& part = object.parts[p];
-        mesh.primitives.push_back(addPart(part, geometry(o, p), builder, gltf, jobs ? part.mesh : nullptr, jobs));
+    // One node per level of detail, LOD0 first; only LOD0 is in the scene, and lists the others
+    // (MSFT_lod), so that a reader without the extension shows LOD0 alone.
+    const int first = static_cast<int>(gltf.nodes.size());
+    for (size_t level = 0; level < object.levels(); ++level) {
+      tinygltf::Node node;
+      node.name = levelName(object, level);
+      if (!object.partsOf(level).empty()) {
+        tinygltf::Mesh mesh;
+        mesh.name = node.name;
+        for (const ExportPart& part : object.partsOf(level))
+          mesh.primitives.push_back(addPart(part, geometry(o, part), builder, gltf, jobs ? part.mesh : nullptr, jobs));
+        gltf.meshes.push_back(std::move(mesh));
+        node.mesh = static_cast<int>(gltf.meshes.size() - 1);
       }
-      gltf.meshes.push_back(std::move(mesh));
-      node.mesh = static_cast<int>(gltf.meshes.size() - 1);
+      gltf.nodes.push_back(std::move(node));
     }
-    gltf.nodes.push_back(std::move(node));
-    scene.nodes.push_back(static_cast<int>(gltf.nodes.size() - 1));
+    if (object.levels() > 1) {
+      tinygltf::Value::Array ids, coverage;
+      for (size_t level = 1; level < object.levels(); ++level) ids.emplace_back(first + static_cast<int>(level));
+      for (float c : object.screenCoverage) coverage.emplace_back(std::round(double(c) * 1e4) / 1e4);
+      tinygltf::Value::Object lod, extras;
+      lod["ids"] = tinygltf::Value(std::move(ids));
+      extras["MSFT_screencoverage"] = tinygltf::Value(std::move(coverage));
+      gltf.nodes[size_t(first)].extensions["MSFT_lod"] = tinygltf::Value(std::move(lod));
+      gltf.nodes[size_t(first)].extras = tinygltf::Value(std::move(extras));
+      if (gltf.extensionsUsed.empty()) gltf.extensionsUsed.push_back("MSFT_lod");
+    }
+    scene.nodes.push_back(first);
   }
   gltf.scenes.push_back(std::move(scene));
   gltf.defaultScene = 0;
@@ -320,8 +362,8 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
   GlbBuilder builder(gltf);
   std::vector<CopyJob> jobs;
   describe(
-      model, [&](size_t o, size_t p) { return geometryOf(*model.objects[o].parts[p].mesh); }, imageSizes(model),
-      builder, gltf, &jobs);
+      model, [&](size_t, const ExportPart& part) { return geometryOf(*part.mesh); }, imageSizes(model), builder, gltf,
+      &jobs);
   // Every view is streamed from the meshes into the file, so that the geometry is never copied
   // into a second in-memory buffer (hundreds of MB for a large plant).
   const size_t binBytes = builder.size();
@@ -341,6 +383,7 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
       writeJob(job, out, scratch);
       at = job.offset + (job.kind == CopyJob::Kind::FlipUv    ? job.count * sizeof(Vec2)
                          : job.kind == CopyJob::Kind::Index16 ? job.count * sizeof(uint16_t)
+                         : job.kind == CopyJob::Kind::NodeId  ? job.count * sizeof(float)
                                                               : job.count);
     }
     out.write(kZeros, binBytes - at);
@@ -353,11 +396,13 @@ namespace {
 // An upper bound on the JSON chunk of a scene's .glb, from what is known before meshing. Each
 // item's allowance is its JSON with every number at its longest (ten digits for a count, size
 // or index; 24 characters for a float) and every optional field present, plus its name with
-// every byte escaped (×6): a part (its primitive, four accessors, four views) 1,099 bytes, a
+// every byte escaped (×6): a part (its primitive, five accessors, five views) 1,294 bytes, a
 // material 381, an image with its texture and sampler 194, a node with its mesh 69. Parts are
-// counted as if every one were non-empty, materials once per distinct look.
-size_t jsonAllowance(const ExportScene& scene) {
-  constexpr size_t kPart = 1100, kMaterial = 400, kImage = 200, kObject = 80, kEscape = 6;
+// counted as if every one were non-empty, materials once per distinct look. With `levels` of
+// detail, a plant's node, mesh and parts come once per level (its names 5 bytes longer), and
+// LOD0's node lists the others (MSFT_lod: ten digits per id, 24 characters per coverage).
+size_t jsonAllowance(const ExportScene& scene, size_t levels) {
+  constexpr size_t kPart = 1300, kMaterial = 400, kImage = 200, kObject = 80, kEscape = 6;
   size_t bytes = 1024;  // asset, scene, buffer, separators
   std::vector<std::string> images, materials;
   auto image = [&](const std::string& spec) {
@@ -378,11 +423,12 @@ size_t jsonAllowance(const ExportScene& scene) {
   for (const plant::PlantModel& p : scene.plants)
     for (const plant::PrimitiveMesh& m : p.meshes) longest = std::max(longest, m.name.size());
   for (const NamedMesh& m : scene.meshes) longest = std::max(longest, m.name.size());
+  if (levels > 1) bytes += 64;  // extensionsUsed
   for (size_t i = 0; i < scene.plants.size(); ++i) {
     const plant::PlantModel& p = scene.plants[i];
-    bytes += kObject + 2 * kEscape * std::max<size_t>(p.name.size(), 16);  // node and mesh names
+    size_t partCount = 0;
     if (p.nodeCount() > 0) {
-      bytes += kPart;
+      ++partCount;
       image(p.bark.texture);
       material(fmt::format("bark|{}|{}|{}", p.bark.texture, colour(p.bark.color), p.bark.roughness), 4);
     }
@@ -391,15 +437,19 @@ size_t jsonAllowance(const ExportScene& scene) {
     for (size_t s = 0; s < used.size(); ++s)
       if (used[s]) {
         const plant::LeafShape shape = mesh::leafShapeFor(p, s);
-        bytes += kPart;
+        ++partCount;
         image(shape.texture);
         material(fmt::format("leaf|{}|{}", shape.texture, colour(shape.tint)), 5 + shape.texture.size());
       }
     for (const plant::PrimitiveMesh& m : p.meshes) {
-      bytes += kPart;
+      ++partCount;
       image(m.texture);
       material(fmt::format("primitive|{}|{}", m.texture, colour(m.color)), longest);
     }
+    const size_t names = levels > 1 ? 5 : 0;  // "_LOD<k>"
+    // node and mesh names
+    bytes += levels * (kObject + 2 * kEscape * (std::max<size_t>(p.name.size(), 16) + names) + kPart * partCount);
+    if (levels > 1) bytes += 96 + 40 * levels;
   }
   for (const NamedMesh& m : scene.meshes) {
     bytes += kObject + kPart + 2 * kEscape * std::max<size_t>(m.name.size(), 16);
@@ -421,6 +471,7 @@ void writePart(const TriangleMesh& m, AtomicFileWriter& out, uint64_t& at, std::
   view(CopyJob::Kind::Bytes, m.positions.data(), n * sizeof(Vec3), n * sizeof(Vec3));
   if (!m.normals.empty()) view(CopyJob::Kind::Bytes, m.normals.data(), n * sizeof(Vec3), n * sizeof(Vec3));
   if (!m.uvs.empty()) view(CopyJob::Kind::FlipUv, m.uvs.data(), n, n * sizeof(Vec2));
+  if (!m.nodeIds.empty()) view(CopyJob::Kind::NodeId, m.nodeIds.data(), n, n * sizeof(float));
   if (smallIndices(n))
     view(CopyJob::Kind::Index16, m.indices.data(), ni, ni * sizeof(uint16_t));
   else
@@ -453,6 +504,7 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
   // Bad plants and options are reported before anything is written: the first bad plant by
   // index, as when they were meshed in order.
   mesh::validateMeshOptions(options.mesh, "mesh options");
+  mesh::validateLodSettings(options.lods, "export options");
   {
     const size_t n = scene.plants.size();
     std::vector<std::exception_ptr> failed(n);
@@ -468,13 +520,14 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
   }
   if (scene.plants.empty()) return writeGlb(buildExportModel(scene, options), path);
 
-  const size_t reserve = jsonAllowance(scene);
+  const size_t reserve = jsonAllowance(scene, size_t(options.lods.levels));
   std::optional<AtomicFileWriter> out(std::in_place, path);
   out->write(std::string(20 + reserve + 8, ' '));  // header, JSON chunk, BIN chunk header: written last
   // Textures load while the plants are meshed and written.
   TexturePreload textures;
   std::vector<PlantParts> parts(scene.plants.size());
   std::vector<PartGeometry> written;  // every plant part's, in file order
+  std::vector<std::string> warnings;  // levels of detail over their budget, in plant order
   uint64_t at = 0;                    // bytes of the binary chunk so far
   std::vector<uint8_t> scratch(kScratchBytes);
   tbb::task_group loading;
@@ -482,6 +535,7 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
   try {
     const size_t tokens = size_t(std::max(2, 2 * tbb::this_task_arena::max_concurrency()));
     std::vector<mesh::PlantMesh> slots(tokens);
+    std::vector<std::vector<mesh::LodLevel>> slotLods(tokens);  // the plant's lower levels of detail
     std::vector<std::vector<PartGeometry>> slotGeometry(tokens);
     size_t next = 0;
     // At most `tokens` plants are in flight, and consecutive ones (the first and last stages
@@ -495,16 +549,23 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
     };
     auto meshPlant = [&](size_t i) {
       mesh::PlantMesh& pm = slots[i % tokens];
-      mesh::buildPlantMesh(scene.plants[i], options.mesh, pm);
+      std::vector<mesh::LodLevel>& lods = slotLods[i % tokens];
+      meshPlantLevels(scene.plants[i], options, pm, lods);
       std::vector<PartGeometry>& g = slotGeometry[i % tokens];
       g.clear();
       forPlantParts(pm, [&](const TriangleMesh& m) { g.push_back(geometryOf(m)); });
+      for (const mesh::LodLevel& level : lods)
+        forPlantParts(level.mesh, [&](const TriangleMesh& m) { g.push_back(geometryOf(m)); });
       return i;
     };
     auto writePlant = [&](size_t i) {
       const mesh::PlantMesh& pm = slots[i % tokens];
-      parts[i] = plantParts(pm);
+      const std::vector<mesh::LodLevel>& lods = slotLods[i % tokens];
+      parts[i] = plantParts(pm, lods);
+      for (std::string& w : lodBudgetWarnings(scene.plants[i], i, lods)) warnings.push_back(std::move(w));
       forPlantParts(pm, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch); });
+      for (const mesh::LodLevel& level : lods)
+        forPlantParts(level.mesh, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch); });
       written.insert(written.end(), slotGeometry[i % tokens].begin(), slotGeometry[i % tokens].end());
     };
     tbb::parallel_pipeline(tokens, tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order, input) &
@@ -515,6 +576,7 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
     throw;
   }
   loading.wait();
+  for (const std::string& w : warnings) log::warn("{}", w);
 
   ExportModel model = assembleExportModel(scene, parts, textures);
   for (size_t o = scene.plants.size(); o < model.objects.size(); ++o)
@@ -533,9 +595,9 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
   size_t plantPart = 0;
   describe(
       model,
-      [&](size_t o, size_t p) {
+      [&](size_t o, const ExportPart& part) {
         if (o < scene.plants.size()) return written[plantPart++];
-        return geometryOf(*model.objects[o].parts[p].mesh);
+        return geometryOf(*part.mesh);
       },
       imageSizes(model), builder, gltf, nullptr);
   const size_t binBytes = builder.size();

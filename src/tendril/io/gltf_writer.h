@@ -6,7 +6,10 @@
 // leaf shape (alphaMode MASK with cutoff 0.5, double-sided, the leaf texture clamped, the
 // shape's tint as baseColorFactor) and one per primitive material. Attributes: POSITION (with
 // min/max), unit NORMAL, TEXCOORD_0 (glTF's v points down the image, so v is flipped from the
-// mesh convention); indices are uint16 when a part has fewer than 65536 vertices, else uint32.
+// mesh convention) and, on plant parts, _NODE_ID: per vertex the skeleton node it was built
+// from (TriangleMesh::nodeIds; a float scalar holding an exact integer, as glTF forbids unsigned
+// int for application-specific attributes; docs/skeleton-format.md); indices are uint16 when a
+// part has fewer than 65536 vertices, else uint32.
 // Images are embedded as PNG/JPEG buffer views. Nothing unused is written, so the Khronos
 // validator reports no errors and no warnings. The bytes depend only on the input, not on the
 // thread count. The file is replaced atomically (atomic_file.h).

@@ -78,7 +78,51 @@ void writeFormatted(AtomicFileWriter& file, size_t count, F&& format) {
 
 std::string extensionFor(const std::string& mime) { return mime == "image/jpeg" ? ".jpg" : ".png"; }
 
+// Level `level` of every object that has it, in one .obj using the materials of `mtlName`.
+// OBJ indices are 1-based and global over the file.
+void writeObjGeometry(const ExportModel& model, size_t level, const std::string& mtlName,
+                      const std::filesystem::path& path) {
+  AtomicFileWriter obj(path);
+  obj.write(fmt::format("# Tendril {}\nmtllib {}\n", TENDRIL_VERSION, mtlName));
+  uint64_t base = 1;
+  for (const ExportObject& object : model.objects) {
+    if (level >= object.levels()) continue;
+    const std::string name = safeName(levelName(object, level));
+    obj.write(fmt::format("o {}\n", name));
+    for (const ExportPart& part : object.partsOf(level)) {
+      const TriangleMesh& m = *part.mesh;
+      obj.write(fmt::format("g {}_{}\nusemtl {}\n", name, safeName(part.name),
+                            safeName(model.materials[part.material].name)));
+      writeFormatted(obj, m.positions.size(), [&](size_t i, LineWriter& w) { w.vec("v", m.positions[i].data(), 3); });
+      writeFormatted(obj, m.uvs.size(), [&](size_t i, LineWriter& w) { w.vec("vt", m.uvs[i].data(), 2); });
+      writeFormatted(obj, m.normals.size(), [&](size_t i, LineWriter& w) { w.vec("vn", m.normals[i].data(), 3); });
+      bool uvs = !m.uvs.empty();
+      writeFormatted(obj, m.triangleCount(), [&](size_t t, LineWriter& w) {
+        w.text("f");
+        for (int k = 0; k < 3; ++k) {
+          uint64_t v = base + m.indices[3 * t + k];
+          w.text(" ");
+          w.integer(v);
+          w.text(uvs ? "/" : "//");
+          if (uvs) {
+            w.integer(v);
+            w.text("/");
+          }
+          w.integer(v);
+        }
+        w.endLine();
+      });
+      base += m.positions.size();
+    }
+  }
+  obj.commit();
+}
+
 }  // namespace
+
+std::filesystem::path objLodPath(const std::filesystem::path& path, size_t level) {
+  return path.parent_path() / fmt::format("{}_LOD{}{}", path.stem().string(), level, path.extension().string());
+}
 
 void writeObj(const ExportModel& model, const std::filesystem::path& path) {
   std::filesystem::path dir = path.parent_path();
@@ -128,39 +172,12 @@ void writeObj(const ExportModel& model, const std::filesystem::path& path) {
   }
   writeFileAtomic(dir / mtlName, mtl);
 
-  // Geometry: OBJ indices are 1-based and global over the file.
-  AtomicFileWriter obj(path);
-  obj.write(fmt::format("# Tendril {}\nmtllib {}\n", TENDRIL_VERSION, mtlName));
-  uint64_t base = 1;
-  for (const ExportObject& object : model.objects) {
-    obj.write(fmt::format("o {}\n", safeName(object.name)));
-    for (const ExportPart& part : object.parts) {
-      const TriangleMesh& m = *part.mesh;
-      obj.write(fmt::format("g {}_{}\nusemtl {}\n", safeName(object.name), safeName(part.name),
-                            safeName(model.materials[part.material].name)));
-      writeFormatted(obj, m.positions.size(), [&](size_t i, LineWriter& w) { w.vec("v", m.positions[i].data(), 3); });
-      writeFormatted(obj, m.uvs.size(), [&](size_t i, LineWriter& w) { w.vec("vt", m.uvs[i].data(), 2); });
-      writeFormatted(obj, m.normals.size(), [&](size_t i, LineWriter& w) { w.vec("vn", m.normals[i].data(), 3); });
-      bool uvs = !m.uvs.empty();
-      writeFormatted(obj, m.triangleCount(), [&](size_t t, LineWriter& w) {
-        w.text("f");
-        for (int k = 0; k < 3; ++k) {
-          uint64_t v = base + m.indices[3 * t + k];
-          w.text(" ");
-          w.integer(v);
-          w.text(uvs ? "/" : "//");
-          if (uvs) {
-            w.integer(v);
-            w.text("/");
-          }
-          w.integer(v);
-        }
-        w.endLine();
-      });
-      base += m.positions.size();
-    }
-  }
-  obj.commit();
+  // Geometry: LOD0 (every object) in <stem>.obj, each lower level of detail of the plants that
+  // have one in <stem>_LOD<k>.obj.
+  size_t levels = 1;
+  for (const ExportObject& object : model.objects) levels = std::max(levels, object.levels());
+  for (size_t level = 0; level < levels; ++level)
+    writeObjGeometry(model, level, mtlName, level == 0 ? path : objLodPath(path, level));
 }
 
 void writeObj(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options) {

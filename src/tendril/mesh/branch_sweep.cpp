@@ -19,23 +19,25 @@ using plant::PlantModel;
 struct ChainPoint {
   Vec3 p;
   float radius;
+  int32_t node;  // the node whose segment starts here (the last tip: the chain's last node)
 };
 
 // The chain's distinct spline points: every segment start and the last tip, each with the
 // radius the surface has there. A point within kMergeDistance of the previous one is merged
-// into it and passes on its radius (it starts the segment that follows).
+// into it and passes on its radius and node (it starts the segment that follows).
 void chainPoints(const PlantModel& plant, std::span<const int32_t> nodes, std::vector<ChainPoint>& out) {
   out.clear();
-  auto push = [&](const Vec3& p, float r) {
+  auto push = [&](const Vec3& p, float r, int32_t node) {
     if (!out.empty() && (p - out.back().p).squaredNorm() <= kMergeDistance * kMergeDistance) {
       out.back().radius = r;
+      out.back().node = node;
       return;
     }
-    out.push_back({p, r});
+    out.push_back({p, r, node});
   };
-  for (int32_t n : nodes) push(plant.position[n], plant.radius[n]);
+  for (int32_t n : nodes) push(plant.position[n], plant.radius[n], n);
   int32_t last = nodes.back();
-  push(plant.tip(last), plant.radius[last]);
+  push(plant.tip(last), plant.radius[last], last);
 }
 
 // One ring of the sweep, before tessellation.
@@ -46,6 +48,7 @@ struct RingSample {
   float radius;
   float slope;  // d radius / d arc length: tilts the surface normals of a tapering branch
   float v;      // texture coordinate along the chain
+  int32_t node;  // the node whose segment the ring lies on
 };
 
 struct RingTable {
@@ -98,6 +101,7 @@ void sampleChain(const PlantModel& plant, std::span<const int32_t> nodes, const 
       r.tangent = dn > 1e-6f * chordLength ? Vec3(d / dn) : chordDir;
       r.radius = j == subdivisions ? b.radius : a.radius + (b.radius - a.radius) * s;
       r.slope = slope;
+      r.node = a.node;
     }
   }
   // Rotation-minimising frames (Wang et al. 2008), starting from the first node's +Z, which
@@ -133,6 +137,7 @@ void emitRing(const RingSample& s, const RingTable& table, int radial, size_t ve
   out.positions[vertex + radial] = out.positions[vertex];
   out.normals[vertex + radial] = out.normals[vertex];
   out.uvs[vertex + radial] = Vec2(1.0f, s.v);
+  if (!out.nodeIds.empty()) std::fill_n(out.nodeIds.begin() + vertex, radial + 1, uint32_t(s.node));
 }
 
 // A fan closing the chain at ring `s`, facing `facing` (±tangent).
@@ -149,6 +154,7 @@ void emitCap(const RingSample& s, const RingTable& table, int radial, bool tip, 
     out.normals[vertex + 1 + j] = facing;
     out.uvs[vertex + 1 + j] = Vec2(0.5f + 0.5f * table.cosine[j], s.v + 0.5f * table.sine[j]);
   }
+  if (!out.nodeIds.empty()) std::fill_n(out.nodeIds.begin() + vertex, radial + 1, uint32_t(s.node));
   // Ring order is counter-clockwise about the tangent: seen from the tip it is
   // counter-clockwise, seen from the base clockwise, hence the swapped winding there.
   uint32_t centre = out.baseVertex + static_cast<uint32_t>(vertex);
@@ -233,7 +239,8 @@ SweepLayout planSweep(const PlantModel& plant, const BranchChains& chains, const
 void sweepBranches(const PlantModel& plant, const BranchChains& chains, const MeshOptions& options,
                    const SweepLayout& layout, const MeshSpans& out) {
   assert(out.positions.size() >= layout.vertexCount() && out.normals.size() >= layout.vertexCount() &&
-         out.uvs.size() >= layout.vertexCount() && out.indices.size() >= layout.indexCount());
+         out.uvs.size() >= layout.vertexCount() && out.indices.size() >= layout.indexCount() &&
+         (out.nodeIds.empty() || out.nodeIds.size() >= layout.vertexCount()));
   const int radial = options.radialSegments;
   const size_t ring = static_cast<size_t>(radial) + 1;
   const RingTable table(radial);
@@ -304,7 +311,9 @@ void sweepBranches(const PlantModel& plant, const MeshOptions& options, Triangle
   mesh.normals.resize(layout.vertexCount());
   mesh.uvs.resize(layout.vertexCount());
   mesh.indices.resize(layout.indexCount());
-  sweepBranches(plant, chains, options, layout, {mesh.positions, mesh.normals, mesh.uvs, mesh.indices, 0});
+  mesh.nodeIds.resize(layout.vertexCount());
+  sweepBranches(plant, chains, options, layout,
+                {mesh.positions, mesh.normals, mesh.uvs, mesh.indices, 0, mesh.nodeIds});
 }
 
 TriangleMesh sweepBranches(const PlantModel& plant, const MeshOptions& options) {

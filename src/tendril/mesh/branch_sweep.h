@@ -11,6 +11,12 @@
 // direction (OpenGL/OBJ convention; the glTF writer flips it). Optional fan caps close the base
 // (facing back along the chain) and the tip.
 //
+// Node ids (TriangleMesh::nodeIds): every vertex carries the skeleton node whose segment its
+// ring was swept from — rings from a segment's start up to (not including) the next segment's
+// start, the chain's last ring and the caps those of their ring's segment. A node merged into
+// the point after it (kMergeDistance) has no segment of its own and no vertices; the point
+// belongs to the last node that starts there.
+//
 // Geometry is written into caller-owned arrays at offsets planned beforehand, chains and ring
 // samples in parallel, so the output is bit-identical for any thread count.
 #pragma once
@@ -69,6 +75,7 @@ struct MeshSpans {
   std::span<Vec2> uvs;
   std::span<uint32_t> indices;
   uint32_t baseVertex = 0;
+  std::span<uint32_t> nodeIds = {};  // optional: left unwritten when empty
 };
 
 void sweepBranches(const plant::PlantModel& plant, const BranchChains& chains, const MeshOptions& options,

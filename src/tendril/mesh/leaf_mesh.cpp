@@ -88,6 +88,7 @@ void buildLeafQuads(const PlantModel& plant, const MeshOptions& options, std::ve
     meshes[s].normals.resize(perShape[s] * nv);
     meshes[s].uvs.resize(perShape[s] * nv);
     meshes[s].indices.resize(perShape[s] * ni);
+    meshes[s].nodeIds.resize(perShape[s] * nv);
   }
   parallelFor(0, leaves, [&](size_t i) {
     uint16_t s = plant.leafShape[i];
@@ -95,6 +96,7 @@ void buildLeafQuads(const PlantModel& plant, const MeshOptions& options, std::ve
     size_t v = slot[i] * nv;
     buildLeafQuad(plant, i, aspect[s], options, &m.positions[v], &m.normals[v], &m.uvs[v],
                   &m.indices[slot[i] * ni], static_cast<uint32_t>(v));
+    std::fill_n(m.nodeIds.begin() + v, nv, static_cast<uint32_t>(plant.leafNode[i]));
   }, 1024);
 }
 

@@ -41,7 +41,8 @@ void buildLeafQuad(const plant::PlantModel& plant, size_t leaf, float aspect, co
                    Vec3* positions, Vec3* normals, Vec2* uvs, uint32_t* indices, uint32_t baseVertex);
 
 // Every leaf, one mesh per shape id (index = shape id; leafShapeCount() meshes, some may be
-// empty), leaves in index order. Parallel, bit-identical for any thread count.
+// empty), leaves in index order, each vertex's node id (TriangleMesh::nodeIds) the node its leaf
+// hangs on. Parallel, bit-identical for any thread count.
 std::vector<TriangleMesh> buildLeafQuads(const plant::PlantModel& plant, const MeshOptions& options);
 // The same into `meshes` (resized; reused meshes keep their memory).
 void buildLeafQuads(const plant::PlantModel& plant, const MeshOptions& options, std::vector<TriangleMesh>& meshes);

@@ -1,6 +1,9 @@
 // PlantModel → triangle meshes: the bark sweep, leaf quads grouped by shape and the primitive
 // meshes, all in world space. The one call apps and exporters use; the pieces live in
-// branch_sweep.h, leaf_mesh.h and primitive_mesh.h.
+// branch_sweep.h, leaf_mesh.h and primitive_mesh.h. Every vertex carries the skeleton node it was
+// built from (TriangleMesh::nodeIds: bark, the node whose segment it was swept from; leaves, the
+// node the leaf hangs on; primitives, their node), which the .glb writes as _NODE_ID and the
+// wind clip skins by.
 #pragma once
 
 #include "tendril/core/triangle_mesh.h"

@@ -50,6 +50,8 @@ std::vector<PrimitiveGroup> buildPrimitiveMeshes(const PlantModel& plant) {
     if (!unitNormals) part.computeNormals();
     size_t g = groupOf[i];
     if (hasUvs[g] && part.uvs.empty()) part.uvs.assign(part.positions.size(), Vec2::Zero());
+    part.nodeIds.clear();
+    if (plant.nodeCount() > 0) part.nodeIds.assign(part.positions.size(), uint32_t(std::max(pr.node, 0)));
     groups[g].mesh.append(part);
   }
   return groups;

@@ -23,7 +23,9 @@ struct PrimitiveGroup {
 Mat4 worldFromNode(const plant::PlantModel& plant, int32_t node);
 
 // Groups in order of first use. Normals are transformed by the inverse transpose (and computed
-// where a mesh has none); mirroring transforms flip the winding so faces still point out.
+// where a mesh has none); mirroring transforms flip the winding so faces still point out. Each
+// vertex's node id (TriangleMesh::nodeIds) is its primitive's node, node 0 (the first root) for
+// a primitive on node −1; a plant without nodes gives meshes without node ids.
 std::vector<PrimitiveGroup> buildPrimitiveMeshes(const plant::PlantModel& plant);
 
 }  // namespace tendril::mesh

@@ -25,6 +25,11 @@ struct OutputSettings {
   float animationSeconds = 0.0f;
   int animationFps = 24;
   int animationJoints = 128;      // joints per plant's skin
+  // Levels of detail per plant (mesh/lod.h): LOD0 included (1 = none); LODk's triangle budget
+  // is LOD0's triangles × lodRatio^k, or lodTriangles[k − 1] when given (lods − 1 of them).
+  int lods = 1;
+  float lodRatio = 0.5f;
+  std::vector<uint64_t> lodTriangles;
 };
 
 struct Scene {

@@ -113,6 +113,10 @@ const s::Schema<OutputSettings>& outputSchema() {
                                      "spline samples per segment"),
           s::boolean<OutputSettings>("include_obstacles", &OutputSettings::includeObstacles, false,
                                      "include obstacles", "write the obstacles into the exported files too"),
+          s::integer<OutputSettings>("lods", &OutputSettings::lods, 1, 1, 8, "levels of detail",
+                                     "levels of detail per plant, LOD0 included (`1`: none)"),
+          s::number<OutputSettings>("lod_ratio", &OutputSettings::lodRatio, 0.5, 0.01, 1.0, "", "LOD ratio",
+                                    "LODk's triangle budget: LOD0's triangles × lod_ratio^k"),
       }};
   return schema;
 }
@@ -164,6 +168,32 @@ WindSettings readWind(JsonObject& o) {
 OutputSettings readOutput(JsonObject& o) {
   OutputSettings out;
   s::readOver(o, outputSchema(), out);
+  // Explicit triangle budgets of LOD1, LOD2, ... in place of lod_ratio (mesh/lod.h); "lods"
+  // defaults to one more than their number.
+  if (const Json* t = o.find("lod_triangles")) {
+    const std::string key = "lod_triangles";
+    if (o.has("lod_ratio")) throw o.error(key, "give \"lod_ratio\" or \"lod_triangles\", not both");
+    if (!t->is_array() || t->empty())
+      throw o.error(key, "expected a non-empty array of triangle counts, got " + describeJson(*t));
+    if (!o.has("lods")) {
+      if (t->size() > 7) throw o.error(key, fmt::format("has {} budgets; at most 7 (lods is at most 8)", t->size()));
+      out.lods = int(t->size()) + 1;
+    }
+    if (t->size() != size_t(out.lods - 1))
+      throw o.error(key, fmt::format("has {} budget(s) but \"lods\" is {}: give one per level below LOD0 ({})",
+                                     t->size(), out.lods, out.lods - 1));
+    for (size_t i = 0; i < t->size(); ++i) {
+      const Json& e = (*t)[i];
+      const std::string at = o.pointerTo(key) + "/" + std::to_string(i);
+      if (!e.is_number_integer() || e.get<int64_t>() < 1)
+        throw Error(o.source(), at, "expected a positive whole number of triangles, got " + e.dump());
+      out.lodTriangles.push_back(e.get<uint64_t>());
+      if (i > 0 && out.lodTriangles[i] > out.lodTriangles[i - 1])
+        throw Error(o.source(), at,
+                    fmt::format("must not exceed the budget of the level above ({}), got {}", out.lodTriangles[i - 1],
+                                out.lodTriangles[i]));
+    }
+  }
   if (auto a = o.optionalObject("wind_animation")) {
     s::setDefaults(windAnimationSchema(), out);
     s::readOver(*a, windAnimationSchema(), out);

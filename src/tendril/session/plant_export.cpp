@@ -3,6 +3,9 @@
 #include "tendril/io/export_model.h"
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
+#include "tendril/io/skeleton_writer.h"
+
+#include <algorithm>
 
 namespace tendril::session {
 
@@ -10,6 +13,9 @@ io::ExportOptions exportOptions(const scene::OutputSettings& output) {
   io::ExportOptions options;
   options.mesh.radialSegments = output.radialSegments;
   options.mesh.subdivisions = output.subdivisions;
+  options.lods.levels = output.lods;
+  options.lods.ratio = output.lodRatio;
+  options.lods.triangles = output.lodTriangles;
   return options;
 }
 
@@ -31,11 +37,17 @@ io::ExportScene exportScene(const Session& session, const std::string& source) {
 
 std::vector<std::string> writePlantFiles(const Session& session, const std::filesystem::path& outDir,
                                          const std::string& stem, const std::set<std::string>& formats,
-                                         const std::string& source, io::ExportScene& exported) {
-  const io::ExportOptions options = exportOptions(session.scene().output);
+                                         const std::string& source, io::ExportScene& exported,
+                                         const scene::OutputSettings* output) {
+  const io::ExportOptions options = exportOptions(output ? *output : session.scene().output);
   exported = exportScene(session, source);
   std::vector<std::string> written;
-  if (formats.size() == 1 && formats.count("glb")) {
+  if (formats.count("skeleton")) {
+    io::writeSkeleton(exported.plants, outDir / (stem + ".skeleton.json"));
+    written.push_back((outDir / (stem + ".skeleton.json")).string());
+  }
+  if (!formats.count("glb") && !formats.count("obj")) return written;
+  if (!formats.count("obj")) {
     // Alone, the .glb streams plant by plant (gltf_writer.h): less memory, and faster.
     io::writeGlb(exported, outDir / (stem + ".glb"), options);
     written.push_back((outDir / (stem + ".glb")).string());
@@ -50,6 +62,10 @@ std::vector<std::string> writePlantFiles(const Session& session, const std::file
   if (formats.count("obj")) {
     io::writeObj(model, outDir / (stem + ".obj"));
     written.push_back((outDir / (stem + ".obj")).string());
+    size_t levels = 1;
+    for (const io::ExportObject& object : model.objects) levels = std::max(levels, object.levels());
+    for (size_t level = 1; level < levels; ++level)
+      written.push_back(io::objLodPath(outDir / (stem + ".obj"), level).string());
   }
   return written;
 }

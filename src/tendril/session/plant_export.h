@@ -15,7 +15,8 @@
 
 namespace tendril::session {
 
-// The scene's output settings as export options (radial segments, subdivisions).
+// The scene's output settings as export options (radial segments, subdivisions, levels of
+// detail).
 io::ExportOptions exportOptions(const scene::OutputSettings& output);
 
 // Snapshots of every plant, in scene order, each checked with plant::validate (an Error names
@@ -23,13 +24,17 @@ io::ExportOptions exportOptions(const scene::OutputSettings& output);
 io::ExportScene exportScene(const Session& session, const std::string& source);
 
 // Meshes the session's plants (and the obstacles, if the scene asks) and writes
-// <outDir>/<stem>.glb and/or .obj (`formats` holds "glb", "obj"), atomically. `source` names the
-// input in validation errors. The snapshot written is kept in `written` (for animation export);
-// returns the files written. What `tendril grow`, `tendril edit` and the Python module's
-// Session.export write.
+// <outDir>/<stem>.glb and/or .obj, and the plant graph as <outDir>/<stem>.skeleton.json
+// (io/skeleton_writer.h): `formats` holds "glb", "obj", "skeleton". Each file is written
+// atomically. `source` names the input in validation errors. The snapshot written is kept in
+// `written` (for animation export); returns the files written. What `tendril grow`, `tendril
+// edit`, `lsys`, `model` and the Python module's Session.export write. `output`, if given,
+// replaces the scene's output settings (the CLI's --lods, --lod-ratio); with levels of detail
+// the .obj's lower levels are <stem>_LOD1.obj, ... (listed in the files written).
 std::vector<std::string> writePlantFiles(const Session& session, const std::filesystem::path& outDir,
                                          const std::string& stem, const std::set<std::string>& formats,
-                                         const std::string& source, io::ExportScene& written);
+                                         const std::string& source, io::ExportScene& written,
+                                         const scene::OutputSettings* output = nullptr);
 
 // The exported plants with their Growth-Flow constants, for the wind and growth clips.
 std::vector<wind::AnimatedPlant> animatedPlants(const Session& session, const io::ExportScene& exported);

@@ -80,60 +80,6 @@ struct Bin {
   }
 };
 
-// For every vertex of a bark (or primitive) mesh, the node whose segment surface is nearest.
-// Segments go into every cell of a uniform grid their radius-expanded bounds touch, so the
-// cell of a vertex holds its own segment.
-std::vector<int32_t> nearestNodes(const plant::PlantModel& plant, const std::vector<Vec3>& points) {
-  const size_t n = plant.nodeCount();
-  std::vector<int32_t> out(points.size(), 0);
-  if (n == 0) return out;
-  std::vector<float> lengths(plant.length);
-  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
-  float cell = std::max(2.0f * lengths[lengths.size() / 2], 1e-3f);
-  struct Key {
-    int32_t x, y, z;
-    bool operator==(const Key&) const = default;
-  };
-  struct KeyHash {
-    size_t operator()(const Key& k) const {
-      return size_t(k.x) * 73856093u ^ size_t(k.y) * 19349663u ^ size_t(k.z) * 83492791u;
-    }
-  };
-  auto keyOf = [&](const Vec3& p) {
-    return Key{int32_t(std::floor(p.x() / cell)), int32_t(std::floor(p.y() / cell)), int32_t(std::floor(p.z() / cell))};
-  };
-  std::unordered_map<Key, std::vector<int32_t>, KeyHash> grid;
-  for (size_t i = 0; i < n; ++i) {
-    Vec3 a = plant.position[i], b = plant.tip(i);
-    float pad = 2.0f * plant.radius[i] + 1e-4f;
-    Key lo = keyOf(a.cwiseMin(b) - Vec3::Constant(pad)), hi = keyOf(a.cwiseMax(b) + Vec3::Constant(pad));
-    for (int32_t x = lo.x; x <= hi.x; ++x)
-      for (int32_t y = lo.y; y <= hi.y; ++y)
-        for (int32_t z = lo.z; z <= hi.z; ++z) grid[Key{x, y, z}].push_back(int32_t(i));
-  }
-  parallelFor(size_t(0), points.size(), [&](size_t v) {
-    const Vec3& p = points[v];
-    auto it = grid.find(keyOf(p));
-    float best = std::numeric_limits<float>::max();
-    int32_t bestNode = -1;
-    auto consider = [&](int32_t i) {
-      Vec3 a = plant.position[size_t(i)], d = plant.tip(size_t(i)) - a;
-      float t = d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0f, 1.0f) : 0.0f;
-      float dist = std::fabs((p - (a + t * d)).norm() - plant.radius[size_t(i)]);
-      if (dist < best) {  // ties keep the lower index: candidates come in index order
-        best = dist;
-        bestNode = i;
-      }
-    };
-    if (it != grid.end())
-      for (int32_t i : it->second) consider(i);
-    if (bestNode < 0)  // a vertex off every segment's cell (end caps of very short segments)
-      for (size_t i = 0; i < n; ++i) consider(int32_t(i));
-    out[v] = bestNode;
-  }, 1024);
-  return out;
-}
-
 // The plant the clip is meshed from: the rest plant without the leaves the loop tears off.
 // `kept` gets the rest plant's index of each leaf left.
 plant::PlantModel withoutTornLeaves(const plant::PlantModel& rest, const LeafLoop& loop, std::vector<uint32_t>& kept) {
@@ -291,25 +237,14 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
     for (const ExportPart& part : object.parts) {
       const TriangleMesh& m = *part.mesh;
       const size_t nv = m.positions.size();
-      std::vector<int32_t> nodeOfVertex;
       int leafShape = -1;
       for (size_t s = 0; s < pm.leaves.size(); ++s)
         if (part.mesh == &pm.leaves[s]) leafShape = int(s);
-      if (leafShape >= 0) {
-        nodeOfVertex.resize(nv);
-        size_t slot = 0;
-        for (size_t l = 0; l < rest.leafCount(); ++l) {
-          if (rest.leafShape[l] != leafShape) continue;
-          for (size_t k = 0; k < nvLeaf; ++k) nodeOfVertex[slot * nvLeaf + k] = rest.leafNode[l];
-          ++slot;
-        }
-      } else {
-        nodeOfVertex = nearestNodes(rest, m.positions);
-      }
+      // Each vertex follows the joint of the node it was built from (mesh/plant_mesh.h).
       std::vector<uint16_t> jointIds(nv * 4, 0);
       std::vector<float> weights(nv * 4, 0.0f);
       for (size_t v = 0; v < nv; ++v) {
-        jointIds[4 * v] = uint16_t(jointOf[size_t(nodeOfVertex[v])]);
+        jointIds[4 * v] = m.nodeIds.empty() ? 0 : uint16_t(jointOf[m.nodeIds[v]]);
         weights[4 * v] = 1.0f;
       }
       std::vector<Vec2> uvs(m.uvs.size());

@@ -3,8 +3,9 @@
 // Each plant is meshed once in its rest pose and skinned to a reduced branch hierarchy of at
 // most `maxJoints` joints: the roots, then branch starts and every K-th node along a branch
 // whose subtree holds at least K nodes, K doubling until the count fits. Every vertex follows
-// one joint (weight 1): the joint of the skeleton node it was built from (leaves: their node;
-// bark: the segment whose surface is nearest). The joints' rotations and translations are
+// one joint (weight 1): the joint of the skeleton node it was built from (TriangleMesh::nodeIds:
+// leaves, their node; bark, the segment it was swept from; primitives, their node). The joints'
+// rotations and translations are
 // sampled from Growth-Flow motion (wind/motion.h) with loopSeconds set, so the last keyframe
 // equals the first and the clip repeats seamlessly. Leaves follow their branches, and their
 // own bending, twisting and vibrating is the loop's periodic leaf motion (motion.h, LeafLoop)
