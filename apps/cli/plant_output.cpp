@@ -39,7 +39,7 @@ void addLodOptions(CLI::App& sub, LodOptions& options) {
       ->check(CLI::Range(1, 8));
   sub.add_option("--lod-ratio", options.ratio,
                  "Triangle budget of LODk: LOD0's triangles x ratio^k (overrides the scene's output.lod_ratio and "
-                 "lod_triangles; default 0.5)")
+                 "lod_triangles; default 0.45)")
       ->check(CLI::Range(0.01, 1.0));
 }
 

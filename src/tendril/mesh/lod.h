@@ -35,7 +35,7 @@ inline constexpr int kMaxLods = 8;
 
 struct LodSettings {
   int levels = 1;                   // LOD0 included; 1 = no chain (1..kMaxLods)
-  float ratio = 0.5f;               // LODk's budget: LOD0's triangles × ratio^k (0.01..1)
+  float ratio = 0.45f;              // LODk's budget: LOD0's triangles × ratio^k (0.01..1)
   std::vector<uint64_t> triangles;  // or explicit budgets of LOD1, LOD2, … (levels − 1, non-increasing, > 0)
 };
 

@@ -28,7 +28,7 @@ struct OutputSettings {
   // Levels of detail per plant (mesh/lod.h): LOD0 included (1 = none); LODk's triangle budget
   // is LOD0's triangles × lodRatio^k, or lodTriangles[k − 1] when given (lods − 1 of them).
   int lods = 1;
-  float lodRatio = 0.5f;
+  float lodRatio = 0.45f;
   std::vector<uint64_t> lodTriangles;
 };
 

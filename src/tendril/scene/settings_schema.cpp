@@ -115,7 +115,7 @@ const s::Schema<OutputSettings>& outputSchema() {
                                      "include obstacles", "write the obstacles into the exported files too"),
           s::integer<OutputSettings>("lods", &OutputSettings::lods, 1, 1, 8, "levels of detail",
                                      "levels of detail per plant, LOD0 included (`1`: none)"),
-          s::number<OutputSettings>("lod_ratio", &OutputSettings::lodRatio, 0.5, 0.01, 1.0, "", "LOD ratio",
+          s::number<OutputSettings>("lod_ratio", &OutputSettings::lodRatio, 0.45, 0.01, 1.0, "", "LOD ratio",
                                     "LODk's triangle budget: LOD0's triangles × lod_ratio^k"),
       }};
   return schema;

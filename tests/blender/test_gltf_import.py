@@ -1,0 +1,101 @@
+"""Blender's own glTF importer (Debian's Blender 3.4, headless) reads what `tendril` exports:
+levels of detail (nodes <plant>_LOD0..3, MSFT_lod), their materials and UVs.
+
+    blender -b --factory-startup --python tests/blender/test_gltf_import.py -- MODULE_DIR
+
+MODULE_DIR holds the `tendril` Python package (default: build/ci/python). Prints one line per
+check and exits non-zero on any failure. (Blender 3.4's importer leaves out application-specific
+attributes such as _NODE_ID; docs/export.md says what each tool reads.)
+"""
+
+import os
+import sys
+import tempfile
+import time
+import traceback
+
+import bpy
+import numpy
+
+# Debian 12's Blender 3.4 importer still uses numpy.bool, which Debian's numpy 1.24 removed.
+numpy.bool = bool
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.normpath(os.path.join(HERE, "..", ".."))
+ARGS = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+MODULE_DIR = os.path.abspath(ARGS[0]) if ARGS else os.path.join(REPO, "build", "ci", "python")
+sys.path.insert(0, MODULE_DIR)
+import tendril  # noqa: E402
+
+T0 = time.perf_counter()
+FAILURES = []
+
+
+def check(name, ok, detail=""):
+    line = f"{'ok  ' if ok else 'FAIL'} {name}" + (f" ({detail})" if detail else "")
+    print(line, flush=True)
+    if not ok:
+        FAILURES.append(line)
+
+
+def triangles(obj):
+    return sum(len(p.vertices) - 2 for p in obj.data.polygons)
+
+
+def run():
+    scene = tendril.Session.open(os.path.join(REPO, "examples", "scenes", "default.json")).scene
+    scene["output"] = dict(scene.get("output", {}), lods=4, lod_ratio=0.5)
+    session = tendril.Session(scene, base_dir=os.path.join(REPO, "examples", "scenes"))
+    session.run(80)
+    names = [session.plant(i).name for i in range(session.plant_count)]
+    out = os.path.join(tempfile.mkdtemp(prefix="tendril-gltf-"), "plant.glb")
+    session.export(out)
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    result = bpy.ops.import_scene.gltf(filepath=out)
+    check("the importer reads the file", result == {"FINISHED"}, str(result))
+    meshes = {o.name: o for o in bpy.data.objects if o.type == "MESH"}
+    for name in names:
+        levels = [meshes.get(f"{name}_LOD{k}") for k in range(4)]
+        check(f"{name}: objects {name}_LOD0..3", all(levels), ", ".join(sorted(meshes)))
+        if not all(levels):
+            continue
+        counts = [triangles(o) for o in levels]
+        check(f"{name}: triangles fall LOD0 > LOD1 > LOD2 > LOD3", all(a > b for a, b in zip(counts, counts[1:])),
+              str(counts))
+        check(f"{name}: LOD3 at most 1/8 of LOD0", counts[3] * 8 <= counts[0], str(counts))
+        for k, obj in enumerate(levels):
+            mats = [m.name for m in obj.data.materials if m]
+            check(f"{name}_LOD{k}: bark and leaf materials", any("bark" in m for m in mats) and
+                  any("leaf" in m or "leaves" in m for m in mats), str(mats))
+            check(f"{name}_LOD{k}: a UV map", len(obj.data.uv_layers) >= 1)
+            # Same place: every level's bounds within 10 % of LOD0's diagonal.
+            lo0 = numpy.array([min(v.co[i] for v in levels[0].data.vertices) for i in range(3)])
+            hi0 = numpy.array([max(v.co[i] for v in levels[0].data.vertices) for i in range(3)])
+            lo = numpy.array([min(v.co[i] for v in obj.data.vertices) for i in range(3)])
+            hi = numpy.array([max(v.co[i] for v in obj.data.vertices) for i in range(3)])
+            diagonal = float(numpy.linalg.norm(hi0 - lo0))
+            off = float(max(numpy.abs(lo - lo0).max(), numpy.abs(hi - hi0).max()))
+            check(f"{name}_LOD{k}: bounds within 10 % of LOD0's", off <= 0.1 * diagonal, f"{off:.3f} of {diagonal:.3f} m")
+    # Leaves are cut out by their texture's alpha (alphaMode MASK).
+    leaf = [m for m in bpy.data.materials if "leaf" in m.name or "leaves" in m.name]
+    check("leaf materials clip by alpha", leaf and all(m.blend_method == "CLIP" for m in leaf),
+          str([(m.name, m.blend_method) for m in leaf]))
+
+
+def main():
+    try:
+        run()
+    except Exception:
+        traceback.print_exc()
+        FAILURES.append("exception")
+        print("FAIL unexpected exception (above)")
+    elapsed = time.perf_counter() - T0
+    if FAILURES:
+        print(f"FAILED: {len(FAILURES)} check(s) ({elapsed:.1f} s)", flush=True)
+        sys.exit(1)
+    print(f"PASSED ({elapsed:.1f} s)", flush=True)
+    sys.exit(0)
+
+
+main()
