@@ -74,7 +74,7 @@ int runModel(const ModelOptions& o) {
   // Meshed once: the triangle count is reported, and both writers take the meshes.
   io::ExportModel model = io::buildExportModel(scene, session::exportOptions(session.scene().output));
   if (formats.count("glb")) {
-    io::writeGlb(model, file(".glb"));
+    io::writeGlb(model, file(".glb"), &scene.wind);
     written.push_back(file(".glb").string());
   }
   if (formats.count("obj")) {

@@ -41,9 +41,17 @@ void addLodOptions(CLI::App& sub, LodOptions& options) {
                  "Triangle budget of LODk: LOD0's triangles x ratio^k (overrides the scene's output.lod_ratio and "
                  "lod_triangles; default 0.45)")
       ->check(CLI::Range(0.01, 1.0));
+  sub.add_flag("--leaf-atlas", options.leafAtlas,
+               "Pack each plant's leaf textures into one atlas, its leaves one material and one mesh part (sets the "
+               "scene's output.leaf_atlas)");
+  sub.add_flag("--wind-data", options.windData,
+               "Engine wind data in the .glb: per vertex the pivot it bends about, its lever, branch level, phase and "
+               "period (COLOR_0, _WIND_PIVOT, _WIND_AXIS; docs/engine-wind.md; sets the scene's output.wind_data)");
 }
 
 void applyLodOptions(const LodOptions& options, scene::OutputSettings& output) {
+  if (options.leafAtlas) output.leafAtlas = true;
+  if (options.windData) output.windData = true;
   if (options.lods > 0) {
     output.lods = options.lods;
     output.lodTriangles.clear();

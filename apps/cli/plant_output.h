@@ -24,10 +24,13 @@ std::filesystem::path prepareOutputDir(const std::string& dir);
 
 // --lods N and --lod-ratio R (grow, edit, lsys, model): levels of detail per plant, overriding
 // the scene's output.lods / lod_ratio; either one replaces output.lod_triangles by the ratio's
-// budgets. 0 = not given.
+// budgets. 0 = not given. With them, --leaf-atlas: each plant's leaf textures packed into one
+// atlas (sets the scene's output.leaf_atlas).
 struct LodOptions {
   int lods = 0;
   double ratio = 0.0;
+  bool leafAtlas = false;
+  bool windData = false;  // --wind-data: engine wind data in the .glb (sets output.wind_data)
 };
 void addLodOptions(CLI::App& sub, LodOptions& options);
 // Applies the options to `output`; --lod-ratio without levels of detail (from --lods or the

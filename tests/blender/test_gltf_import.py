@@ -82,6 +82,39 @@ def run():
     check("leaf materials clip by alpha", leaf and all(m.blend_method == "CLIP" for m in leaf),
           str([(m.name, m.blend_method) for m in leaf]))
 
+    # The leaf atlas (one leaf material per plant) and engine wind data (COLOR_0 becomes a colour
+    # attribute; the _WIND_* and _NODE_ID attributes are not imported by Blender 3.4).
+    scene["output"] = dict(scene["output"], leaf_atlas=True, wind_data=True)
+    session = tendril.Session(scene, base_dir=os.path.join(REPO, "examples", "scenes"))
+    session.run(80)
+    out = os.path.join(os.path.dirname(out), "atlas.glb")
+    session.export(out)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    result = bpy.ops.import_scene.gltf(filepath=out)
+    check("the importer reads the atlas file", result == {"FINISHED"}, str(result))
+    for name in names:
+        obj = bpy.data.objects.get(f"{name}_LOD0")
+        if not obj:
+            check(f"{name}_LOD0 in the atlas file", False)
+            continue
+        mats = [m.name for m in obj.data.materials if m]
+        leafs = [m for m in mats if "leaf" in m]
+        check(f"{name}: one leaf material, the atlas", len(leafs) == 1 and "atlas" in leafs[0], str(mats))
+        images = {n.image.name for m in obj.data.materials if m and m.node_tree
+                  for n in m.node_tree.nodes if n.type == "TEX_IMAGE" and n.image and "leaf" in m.name}
+        check(f"{name}: the atlas material has one image", len(images) == 1, str(images))
+        colours = [a.name for a in obj.data.color_attributes] if hasattr(obj.data, "color_attributes") else []
+        check(f"{name}: COLOR_0 (engine wind data) imported as a colour attribute", len(colours) >= 1, str(colours))
+        if colours:
+            data = obj.data.color_attributes[colours[0]].data
+            values = numpy.zeros(len(data) * 4, dtype=numpy.float32)
+            data.foreach_get("color", values)
+            values = values.reshape(-1, 4)
+            # The leaf flag (alpha) is 1 on leaf vertices and 0 on bark; the phase is in [0, 1).
+            check(f"{name}: COLOR_0's leaf flag is 0 or 1 and both occur",
+                  set(numpy.unique(numpy.round(values[:, 3], 3))) == {0.0, 1.0},
+                  str(numpy.unique(numpy.round(values[:, 3], 3))[:5]))
+
 
 def main():
     try:

@@ -80,12 +80,28 @@ class ModelBuilder {
     return static_cast<int>(model_.textures.size() - 1);
   }
 
+  // The clamped texture of a leaf atlas (its image taken from the atlas on first use).
+  int atlasTexture(const std::string& spec, EncodedImage& encoded) {
+    int image = -1;
+    for (size_t i = 0; i < model_.images.size(); ++i)
+      if (model_.images[i].spec == spec) image = static_cast<int>(i);
+    if (image < 0) {
+      model_.images.push_back({spec, std::move(encoded)});
+      image = static_cast<int>(model_.images.size() - 1);
+    }
+    for (size_t t = 0; t < model_.textures.size(); ++t)
+      if (model_.textures[t].image == image && !model_.textures[t].repeat) return static_cast<int>(t);
+    model_.textures.push_back({image, false});
+    return static_cast<int>(model_.textures.size() - 1);
+  }
+
   // The index of an equal material, or of `m` added under a unique version of its name.
   int material(ExportMaterial m) {
     for (size_t i = 0; i < model_.materials.size(); ++i) {
       const ExportMaterial& o = model_.materials[i];
       if (o.kind == m.kind && o.texture == m.texture && o.baseColor == m.baseColor && o.roughness == m.roughness &&
-          o.metallic == m.metallic && o.alphaMask == m.alphaMask && o.doubleSided == m.doubleSided)
+          o.metallic == m.metallic && o.alphaMask == m.alphaMask && o.doubleSided == m.doubleSided &&
+          o.diffuseTransmission == m.diffuseTransmission)
         return static_cast<int>(i);
     }
     std::string base = m.name;
@@ -192,8 +208,9 @@ TexturePreload preloadTextures(const ExportScene& scene) {
 }
 
 ExportModel assembleExportModel(const ExportScene& scene, const std::vector<PlantParts>& parts,
-                                TexturePreload& textures) {
+                                TexturePreload& textures, LeafAtlases* atlases) {
   assert(parts.size() == scene.plants.size());
+  assert(!atlases || atlases->plants.size() == scene.plants.size());
   ExportModel model;
   model.extraMeshes.reserve(scene.meshes.size());
   for (const NamedMesh& m : scene.meshes) model.extraMeshes.push_back(preparedMesh(m));
@@ -220,8 +237,24 @@ ExportModel assembleExportModel(const ExportScene& scene, const std::vector<Plan
       }
       object.parts.push_back({"bark", nullptr, builder.material(std::move(m)), PartSource::Bark, 0});
     }
+    const PlantLeafAtlas* leafAtlas = atlases && atlases->plants[i].atlas >= 0 ? &atlases->plants[i] : nullptr;
     for (size_t s = 0; s < pm.leaves.size(); ++s) {
       if (!pm.leaves[s]) continue;
+      if (leafAtlas) {
+        // Every leaf, in the atlas's one material.
+        LeafAtlas& atlas = atlases->atlases[size_t(leafAtlas->atlas)];
+        ExportMaterial m;
+        m.kind = Kind::Leaf;
+        m.name = "leaf-atlas";
+        m.baseColor = Vec4(atlas.tint.x(), atlas.tint.y(), atlas.tint.z(), 1.0f);
+        m.roughness = 0.5f;
+        m.texture = builder.atlasTexture(atlas.spec, atlas.image);
+        m.alphaMask = true;
+        m.doubleSided = true;
+        m.diffuseTransmission = kLeafDiffuseTransmission;
+        object.parts.push_back({"leaves", nullptr, builder.material(std::move(m)), PartSource::Leaves, uint32_t(s)});
+        continue;
+      }
       plant::LeafShape shape = mesh::leafShapeFor(p, s);
       ExportMaterial m;
       m.kind = Kind::Leaf;
@@ -304,13 +337,22 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
           if (e) std::rethrow_exception(e);
       },
       [&] { textures = preloadTextures(scene); });
+  LeafAtlases atlases;
+  if (options.leafAtlas) {
+    atlases = buildLeafAtlases(scene, textures);
+    parallelFor(0, meshes.size(), [&](size_t i) {
+      applyLeafAtlas(atlases, atlases.plants[i], meshes[i]);
+      for (mesh::LodLevel& level : lods[i]) applyLeafAtlas(atlases, atlases.plants[i], level.mesh);
+    }, 1);
+  }
   std::vector<PlantParts> parts;
   parts.reserve(meshes.size());
   for (size_t i = 0; i < meshes.size(); ++i) {
     parts.push_back(plantParts(meshes[i], lods[i]));
     for (const std::string& w : lodBudgetWarnings(scene.plants[i], i, lods[i])) log::warn("{}", w);
   }
-  ExportModel model = assembleExportModel(scene, parts, textures);
+  ExportModel model = assembleExportModel(scene, parts, textures, options.leafAtlas ? &atlases : nullptr);
+  model.leafAtlases = std::move(atlases);
   model.plantMeshes = std::move(meshes);
   model.plantLods = std::move(lods);
   auto meshOf = [](const mesh::PlantMesh& pm, const ExportPart& part) {

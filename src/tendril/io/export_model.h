@@ -4,6 +4,7 @@
 #pragma once
 
 #include "tendril/io/export_scene.h"
+#include "tendril/io/leaf_atlas.h"
 #include "tendril/io/texture.h"
 #include "tendril/mesh/plant_mesh.h"
 
@@ -34,6 +35,9 @@ struct ExportMaterial {
   int texture = -1;                // index into ExportModel::textures
   bool alphaMask = false;          // leaves: cut out where texture alpha < 0.5
   bool doubleSided = false;
+  // KHR_materials_diffuse_transmission: the share of diffuse light let through (leaf atlases'
+  // leaves, lit from behind), coloured by the base colour texture; 0: none.
+  float diffuseTransmission = 0.0f;
 };
 
 // Where a part's triangles come from: its object's plant mesh (bark, the leaves of one shape,
@@ -80,6 +84,8 @@ struct ExportModel {
   std::vector<ExportMaterial> materials;
   std::vector<ExportTexture> textures;
   std::vector<ExportImage> images;
+  // With ExportOptions::leafAtlas: each plant's atlas layout (its image moved into `images`).
+  LeafAtlases leafAtlases;
 };
 
 // Throws Error for invalid plants or options and for textures that cannot be read. Levels
@@ -122,8 +128,10 @@ TexturePreload preloadTextures(const ExportScene& scene);
 // Materials, textures, images, extra meshes and objects for a scene whose plants' meshes have
 // `parts` (one per plant), as buildExportModel makes them, but without plant meshes: parts of
 // plants have a null `mesh` (the streaming .glb writer meshes plants one at a time and keeps
-// none). Takes the preloaded textures it uses. Throws as buildExportModel.
+// none). Takes the preloaded textures it uses. Throws as buildExportModel. With `atlases`
+// (whose plant meshes went through applyLeafAtlas), a plant's leaves are one part, "leaves",
+// with the material of its atlas, whose image it takes.
 ExportModel assembleExportModel(const ExportScene& scene, const std::vector<PlantParts>& parts,
-                                TexturePreload& textures);
+                                TexturePreload& textures, LeafAtlases* atlases = nullptr);
 
 }  // namespace tendril::io

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "tendril/core/triangle_mesh.h"
+#include "tendril/io/wind_attributes.h"
 #include "tendril/mesh/lod.h"
 #include "tendril/mesh/mesh_options.h"
 #include "tendril/plant/plant_model.h"
@@ -21,6 +22,9 @@ struct NamedMesh {
 struct ExportScene {
   std::vector<plant::PlantModel> plants;
   std::vector<NamedMesh> meshes;
+  // Engine wind data per plant (wind::engineWindTables, docs/engine-wind.md): with a table for
+  // plant i, the .glb gives its vertices COLOR_0, _WIND_PIVOT and _WIND_AXIS. Empty: none.
+  WindTables wind;
 };
 
 struct ExportOptions {
@@ -28,6 +32,9 @@ struct ExportOptions {
   // Levels of detail per plant (mesh/lod.h); with more than one, every level (LOD0 too) is
   // written in vertex cache and fetch order.
   mesh::LodSettings lods;
+  // Each plant's leaf textures packed into one atlas and its leaves (every level) one part with
+  // one material, UVs remapped into the atlas (io/leaf_atlas.h).
+  bool leafAtlas = false;
 };
 
 inline ExportOptions defaultExportOptions() { return {}; }

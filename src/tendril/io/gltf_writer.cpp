@@ -31,12 +31,19 @@ static_assert(std::endian::native == std::endian::little, "the .glb writer assum
 
 // The content of one buffer view; views are written in offset order.
 struct CopyJob {
-  enum class Kind { Bytes, FlipUv, Index16, NodeId };
+  enum class Kind { Bytes, FlipUv, Index16, NodeId, WindColor, WindPivot, WindAxis };
   Kind kind = Kind::Bytes;
   const void* source = nullptr;
-  size_t count = 0;   // bytes (Bytes), uvs (FlipUv), indices (Index16) or node ids (NodeId)
+  size_t count = 0;   // bytes (Bytes), uvs (FlipUv), indices (Index16) or node ids (NodeId, Wind*)
   size_t offset = 0;  // in the buffer
+  // Wind*: the plant's engine wind table (by node id) and whether the part is leaves.
+  const WindVertexNode* wind = nullptr;
+  size_t windNodes = 0;
+  bool leaf = false;
 };
+
+// Bytes per vertex of a wind view: COLOR_0 (float RGBA), _WIND_PIVOT and _WIND_AXIS (float VEC3).
+size_t windBytes(CopyJob::Kind kind) { return kind == CopyJob::Kind::WindColor ? 4 * sizeof(float) : sizeof(Vec3); }
 
 // Node ids are written as floats (glTF forbids unsigned int for application-specific
 // attributes), exact integers below 2^24.
@@ -93,6 +100,31 @@ void writeJob(const CopyJob& job, AtomicFileWriter& out, std::vector<uint8_t>& s
           f[i] = static_cast<float>(id[b + i]);
         }
         out.write(scratch.data(), n * sizeof(float));
+      }
+      return;
+    }
+    case CopyJob::Kind::WindColor:
+    case CopyJob::Kind::WindPivot:
+    case CopyJob::Kind::WindAxis: {
+      // Per vertex its node's record (docs/engine-wind.md); a block of at most kScratchBytes.
+      const uint32_t* id = static_cast<const uint32_t*>(job.source);
+      const size_t bytes = windBytes(job.kind), block = kScratchBytes / bytes;
+      for (size_t b = 0; b < job.count; b += block) {
+        size_t n = std::min(block, job.count - b);
+        float* f = reinterpret_cast<float*>(scratch.data());
+        for (size_t i = 0; i < n; ++i) {
+          if (id[b + i] >= job.windNodes)
+            throw Error(out.path().string(), "", fmt::format("cannot write .glb: node id {} has no wind data (the "
+                                                             "plant has {} nodes)", id[b + i], job.windNodes));
+          const WindVertexNode& w = job.wind[id[b + i]];
+          if (job.kind == CopyJob::Kind::WindColor) {
+            f[4 * i] = w.level, f[4 * i + 1] = w.phase, f[4 * i + 2] = w.period, f[4 * i + 3] = job.leaf ? 1.0f : 0.0f;
+          } else {
+            const Vec3& v = job.kind == CopyJob::Kind::WindPivot ? w.pivot : w.lever;
+            f[3 * i] = v.x(), f[3 * i + 1] = v.y(), f[3 * i + 2] = v.z();
+          }
+        }
+        out.write(scratch.data(), n * bytes);
       }
       return;
     }
@@ -153,20 +185,29 @@ struct PartGeometry {
   bool normals = false, uvs = false;
   Bounds3 bounds;
   bool nodeIds = false;
+  bool wind = false;  // engine wind data: COLOR_0, _WIND_PIVOT, _WIND_AXIS
 };
 
-PartGeometry geometryOf(const TriangleMesh& m) {
+// `wind`: the part's plant has a wind table (written where the part has node ids).
+PartGeometry geometryOf(const TriangleMesh& m, bool wind = false) {
   return {m.positions.size(), m.indices.size(), !m.normals.empty(), !m.uvs.empty(), parallelBounds(m.positions),
-          !m.nodeIds.empty()};
+          !m.nodeIds.empty(), wind && !m.nodeIds.empty()};
+}
+
+// A plant's wind table, or none.
+const std::vector<WindVertexNode>* windTableOf(const WindTables* tables, size_t object) {
+  return tables && object < tables->size() && !(*tables)[object].empty() ? &(*tables)[object] : nullptr;
 }
 
 // uint16 indices when they fit; 65535 itself is the primitive-restart value and not allowed.
 bool smallIndices(size_t vertices) { return vertices < 65536; }
 
 // The part's views and accessors, in the order its bytes are written: positions, normals,
-// uvs, node ids, indices. With `mesh`, the copy jobs that write them.
+// uvs, node ids, wind data (COLOR_0, _WIND_PIVOT, _WIND_AXIS), indices. With `mesh`, the copy
+// jobs that write them (the wind data from `wind`, the plant's table).
 tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBuilder& b, tinygltf::Model& gltf,
-                            const TriangleMesh* mesh, std::vector<CopyJob>* jobs) {
+                            const TriangleMesh* mesh, std::vector<CopyJob>* jobs,
+                            const std::vector<WindVertexNode>* wind = nullptr) {
   const size_t n = g.vertices;
   tinygltf::Primitive prim;
   prim.mode = TINYGLTF_MODE_TRIANGLES;
@@ -193,6 +234,20 @@ tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBu
     int iv = b.view(n * sizeof(float), kArrayBuffer);
     prim.attributes["_NODE_ID"] = b.accessor(iv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, n);
     if (mesh) jobs->push_back({CopyJob::Kind::NodeId, mesh->nodeIds.data(), n, b.offsetOf(iv)});
+  }
+  if (g.wind) {
+    const std::pair<const char*, CopyJob::Kind> views[3] = {
+        {"COLOR_0", CopyJob::Kind::WindColor}, {"_WIND_PIVOT", CopyJob::Kind::WindPivot}, {"_WIND_AXIS", CopyJob::Kind::WindAxis}};
+    for (const auto& [name, kind] : views) {
+      int wv = b.view(n * windBytes(kind), kArrayBuffer);
+      prim.attributes[name] = b.accessor(wv, TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                         kind == CopyJob::Kind::WindColor ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, n);
+      if (mesh) {
+        if (!wind) throw Error("", "", "cannot write .glb: a part with wind data has no wind table (internal error)");
+        jobs->push_back({kind, mesh->nodeIds.data(), n, b.offsetOf(wv), wind->data(), wind->size(),
+                         part.source == PartSource::Leaves});
+      }
+    }
   }
   const bool small = smallIndices(n);
   const size_t ni = g.indices;
@@ -225,6 +280,19 @@ void appendMaterialsAndTextures(const ExportModel& model, tinygltf::Model& gltf)
       g.alphaCutoff = 0.5;
     }
     g.doubleSided = m.doubleSided;
+    if (m.diffuseTransmission > 0.0f) {
+      // Translucent leaves: light from behind shows through, in the texture's colour.
+      tinygltf::Value::Object transmission, colour;
+      transmission["diffuseTransmissionFactor"] = tinygltf::Value(double(m.diffuseTransmission));
+      if (m.texture >= 0) {
+        colour["index"] = tinygltf::Value(m.texture);
+        transmission["diffuseTransmissionColorTexture"] = tinygltf::Value(std::move(colour));
+      }
+      g.extensions["KHR_materials_diffuse_transmission"] = tinygltf::Value(std::move(transmission));
+      const std::string name = "KHR_materials_diffuse_transmission";
+      if (std::find(gltf.extensionsUsed.begin(), gltf.extensionsUsed.end(), name) == gltf.extensionsUsed.end())
+        gltf.extensionsUsed.push_back(name);
+    }
     gltf.materials.push_back(std::move(g));
   }
 
@@ -254,10 +322,10 @@ namespace {
 // accessors, materials, textures, images. geometry(o, p) describes part p of object o;
 // imageBytes[i] is the encoded size of image i. Views are laid out in the order the bytes are
 // written: every part in object order, then the images. With `jobs`, the copy jobs that write
-// them (every part then needs its mesh).
+// them (every part then needs its mesh; plant o's wind data comes from windTableOf(wind, o)).
 template <class Geometry>
 void describe(const ExportModel& model, Geometry&& geometry, const std::vector<size_t>& imageBytes,
-              GlbBuilder& builder, tinygltf::Model& gltf, std::vector<CopyJob>* jobs) {
+              GlbBuilder& builder, tinygltf::Model& gltf, std::vector<CopyJob>* jobs, const WindTables* wind) {
   gltf.asset.version = "2.0";
   gltf.asset.generator = "Tendril " TENDRIL_VERSION;
   tinygltf::Scene scene;
@@ -274,7 +342,8 @@ void describe(const ExportModel& model, Geometry&& geometry, const std::vector<s
         tinygltf::Mesh mesh;
         mesh.name = node.name;
         for (const ExportPart& part : object.partsOf(level))
-          mesh.primitives.push_back(addPart(part, geometry(o, part), builder, gltf, jobs ? part.mesh : nullptr, jobs));
+          mesh.primitives.push_back(addPart(part, geometry(o, part), builder, gltf, jobs ? part.mesh : nullptr, jobs,
+                                            windTableOf(wind, o)));
         gltf.meshes.push_back(std::move(mesh));
         node.mesh = static_cast<int>(gltf.meshes.size() - 1);
       }
@@ -357,13 +426,14 @@ const uint8_t kZeros[4] = {0, 0, 0, 0};
 
 }  // namespace
 
-void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
+void writeGlb(const ExportModel& model, const std::filesystem::path& path, const WindTables* wind) {
   tinygltf::Model gltf;
   GlbBuilder builder(gltf);
   std::vector<CopyJob> jobs;
   describe(
-      model, [&](size_t, const ExportPart& part) { return geometryOf(*part.mesh); }, imageSizes(model), builder, gltf,
-      &jobs);
+      model,
+      [&](size_t o, const ExportPart& part) { return geometryOf(*part.mesh, windTableOf(wind, o) != nullptr); },
+      imageSizes(model), builder, gltf, &jobs, wind);
   // Every view is streamed from the meshes into the file, so that the geometry is never copied
   // into a second in-memory buffer (hundreds of MB for a large plant).
   const size_t binBytes = builder.size();
@@ -384,7 +454,10 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path) {
       at = job.offset + (job.kind == CopyJob::Kind::FlipUv    ? job.count * sizeof(Vec2)
                          : job.kind == CopyJob::Kind::Index16 ? job.count * sizeof(uint16_t)
                          : job.kind == CopyJob::Kind::NodeId  ? job.count * sizeof(float)
-                                                              : job.count);
+                         : job.kind == CopyJob::Kind::WindColor || job.kind == CopyJob::Kind::WindPivot ||
+                                 job.kind == CopyJob::Kind::WindAxis
+                             ? job.count * windBytes(job.kind)
+                             : job.count);
     }
     out.write(kZeros, binBytes - at);
   }
@@ -401,8 +474,10 @@ namespace {
 // counted as if every one were non-empty, materials once per distinct look. With `levels` of
 // detail, a plant's node, mesh and parts come once per level (its names 5 bytes longer), and
 // LOD0's node lists the others (MSFT_lod: ten digits per id, 24 characters per coverage).
-size_t jsonAllowance(const ExportScene& scene, size_t levels) {
+size_t jsonAllowance(const ExportScene& scene, size_t levels, bool leafAtlas) {
   constexpr size_t kPart = 1300, kMaterial = 400, kImage = 200, kObject = 80, kEscape = 6;
+  // Engine wind data: three more accessors and views per plant part (COLOR_0, _WIND_PIVOT, _WIND_AXIS).
+  const size_t windPart = scene.wind.empty() ? 0 : 800;
   size_t bytes = 1024;  // asset, scene, buffer, separators
   std::vector<std::string> images, materials;
   auto image = [&](const std::string& spec) {
@@ -424,6 +499,7 @@ size_t jsonAllowance(const ExportScene& scene, size_t levels) {
     for (const plant::PrimitiveMesh& m : p.meshes) longest = std::max(longest, m.name.size());
   for (const NamedMesh& m : scene.meshes) longest = std::max(longest, m.name.size());
   if (levels > 1) bytes += 64;  // extensionsUsed
+  if (leafAtlas) bytes += 64;    // KHR_materials_diffuse_transmission in extensionsUsed
   for (size_t i = 0; i < scene.plants.size(); ++i) {
     const plant::PlantModel& p = scene.plants[i];
     size_t partCount = 0;
@@ -440,6 +516,7 @@ size_t jsonAllowance(const ExportScene& scene, size_t levels) {
         ++partCount;
         image(shape.texture);
         material(fmt::format("leaf|{}|{}", shape.texture, colour(shape.tint)), 5 + shape.texture.size());
+        if (leafAtlas) bytes += kImage + kMaterial + kEscape * (shape.texture.size() + 64);  // its share of the atlas
       }
     for (const plant::PrimitiveMesh& m : p.meshes) {
       ++partCount;
@@ -448,7 +525,7 @@ size_t jsonAllowance(const ExportScene& scene, size_t levels) {
     }
     const size_t names = levels > 1 ? 5 : 0;  // "_LOD<k>"
     // node and mesh names
-    bytes += levels * (kObject + 2 * kEscape * (std::max<size_t>(p.name.size(), 16) + names) + kPart * partCount);
+    bytes += levels * (kObject + 2 * kEscape * (std::max<size_t>(p.name.size(), 16) + names) + (kPart + windPart) * partCount);
     if (levels > 1) bytes += 96 + 40 * levels;
   }
   for (const NamedMesh& m : scene.meshes) {
@@ -459,8 +536,10 @@ size_t jsonAllowance(const ExportScene& scene, size_t levels) {
 }
 
 // Writes one part's arrays at the end of the binary chunk (`at` bytes so far), each view
-// 4-byte aligned as GlbBuilder lays them out.
-void writePart(const TriangleMesh& m, AtomicFileWriter& out, uint64_t& at, std::vector<uint8_t>& scratch) {
+// 4-byte aligned as GlbBuilder lays them out; the wind data (where the part has node ids) from
+// the plant's table `wind`, `leaf` for a leaf part.
+void writePart(const TriangleMesh& m, AtomicFileWriter& out, uint64_t& at, std::vector<uint8_t>& scratch,
+               const std::vector<WindVertexNode>* wind = nullptr, bool leaf = false) {
   auto view = [&](CopyJob::Kind kind, const void* source, size_t count, size_t bytes) {
     out.write(kZeros, align4(at) - at);
     at = align4(at);
@@ -472,10 +551,22 @@ void writePart(const TriangleMesh& m, AtomicFileWriter& out, uint64_t& at, std::
   if (!m.normals.empty()) view(CopyJob::Kind::Bytes, m.normals.data(), n * sizeof(Vec3), n * sizeof(Vec3));
   if (!m.uvs.empty()) view(CopyJob::Kind::FlipUv, m.uvs.data(), n, n * sizeof(Vec2));
   if (!m.nodeIds.empty()) view(CopyJob::Kind::NodeId, m.nodeIds.data(), n, n * sizeof(float));
+  if (wind && !m.nodeIds.empty())
+    for (CopyJob::Kind kind : {CopyJob::Kind::WindColor, CopyJob::Kind::WindPivot, CopyJob::Kind::WindAxis}) {
+      out.write(kZeros, align4(at) - at);
+      at = align4(at);
+      writeJob({kind, m.nodeIds.data(), n, at, wind->data(), wind->size(), leaf}, out, scratch);
+      at += n * windBytes(kind);
+    }
   if (smallIndices(n))
     view(CopyJob::Kind::Index16, m.indices.data(), ni, ni * sizeof(uint16_t));
   else
     view(CopyJob::Kind::Bytes, m.indices.data(), ni * sizeof(uint32_t), ni * sizeof(uint32_t));
+}
+
+// Whether `m`, one of `pm`'s part meshes, is a leaf part.
+bool isLeafPart(const mesh::PlantMesh& pm, const TriangleMesh& m) {
+  return std::any_of(pm.leaves.begin(), pm.leaves.end(), [&](const TriangleMesh& l) { return &l == &m; });
 }
 
 // A plant's non-empty part meshes in the order assembleExportModel makes its parts: bark,
@@ -518,9 +609,9 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
     for (const std::exception_ptr& e : failed)
       if (e) std::rethrow_exception(e);
   }
-  if (scene.plants.empty()) return writeGlb(buildExportModel(scene, options), path);
+  if (scene.plants.empty()) return writeGlb(buildExportModel(scene, options), path, &scene.wind);
 
-  const size_t reserve = jsonAllowance(scene, size_t(options.lods.levels));
+  const size_t reserve = jsonAllowance(scene, size_t(options.lods.levels), options.leafAtlas);
   std::optional<AtomicFileWriter> out(std::in_place, path);
   out->write(std::string(20 + reserve + 8, ' '));  // header, JSON chunk, BIN chunk header: written last
   // Textures load while the plants are meshed and written.
@@ -532,6 +623,12 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
   std::vector<uint8_t> scratch(kScratchBytes);
   tbb::task_group loading;
   loading.run([&] { textures = preloadTextures(scene); });
+  // A leaf atlas remaps the UVs of the meshes: its layout (from the textures' sizes) comes first.
+  LeafAtlases atlases;
+  if (options.leafAtlas) {
+    loading.wait();
+    atlases = buildLeafAtlases(scene, textures);
+  }
   try {
     const size_t tokens = size_t(std::max(2, 2 * tbb::this_task_arena::max_concurrency()));
     std::vector<mesh::PlantMesh> slots(tokens);
@@ -551,11 +648,16 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
       mesh::PlantMesh& pm = slots[i % tokens];
       std::vector<mesh::LodLevel>& lods = slotLods[i % tokens];
       meshPlantLevels(scene.plants[i], options, pm, lods);
+      if (options.leafAtlas) {
+        applyLeafAtlas(atlases, atlases.plants[i], pm);
+        for (mesh::LodLevel& level : lods) applyLeafAtlas(atlases, atlases.plants[i], level.mesh);
+      }
       std::vector<PartGeometry>& g = slotGeometry[i % tokens];
       g.clear();
-      forPlantParts(pm, [&](const TriangleMesh& m) { g.push_back(geometryOf(m)); });
+      const bool wind = windTableOf(&scene.wind, i) != nullptr;
+      forPlantParts(pm, [&](const TriangleMesh& m) { g.push_back(geometryOf(m, wind)); });
       for (const mesh::LodLevel& level : lods)
-        forPlantParts(level.mesh, [&](const TriangleMesh& m) { g.push_back(geometryOf(m)); });
+        forPlantParts(level.mesh, [&](const TriangleMesh& m) { g.push_back(geometryOf(m, wind)); });
       return i;
     };
     auto writePlant = [&](size_t i) {
@@ -563,9 +665,11 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
       const std::vector<mesh::LodLevel>& lods = slotLods[i % tokens];
       parts[i] = plantParts(pm, lods);
       for (std::string& w : lodBudgetWarnings(scene.plants[i], i, lods)) warnings.push_back(std::move(w));
-      forPlantParts(pm, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch); });
+      const std::vector<WindVertexNode>* wind = windTableOf(&scene.wind, i);
+      forPlantParts(pm, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch, wind, isLeafPart(pm, m)); });
       for (const mesh::LodLevel& level : lods)
-        forPlantParts(level.mesh, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch); });
+        forPlantParts(level.mesh,
+                      [&](const TriangleMesh& m) { writePart(m, *out, at, scratch, wind, isLeafPart(level.mesh, m)); });
       written.insert(written.end(), slotGeometry[i % tokens].begin(), slotGeometry[i % tokens].end());
     };
     tbb::parallel_pipeline(tokens, tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order, input) &
@@ -578,7 +682,7 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
   loading.wait();
   for (const std::string& w : warnings) log::warn("{}", w);
 
-  ExportModel model = assembleExportModel(scene, parts, textures);
+  ExportModel model = assembleExportModel(scene, parts, textures, options.leafAtlas ? &atlases : nullptr);
   for (size_t o = scene.plants.size(); o < model.objects.size(); ++o)
     for (const ExportPart& part : model.objects[o].parts) writePart(*part.mesh, *out, at, scratch);
   for (const ExportImage& img : model.images) {
@@ -599,14 +703,14 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
         if (o < scene.plants.size()) return written[plantPart++];
         return geometryOf(*part.mesh);
       },
-      imageSizes(model), builder, gltf, nullptr);
+      imageSizes(model), builder, gltf, nullptr, &scene.wind);
   const size_t binBytes = builder.size();
   if (plantPart != written.size() || binBytes != at)
     throw Error(path.string(), "", "cannot write .glb: the streamed parts do not match the model (internal error)");
   std::string content = glbJson(gltf, binBytes, path);
   if (content.size() > reserve || binBytes == 0) {
     out.reset();  // removes the temporary
-    return writeGlb(buildExportModel(scene, options), path);
+    return writeGlb(buildExportModel(scene, options), path, &scene.wind);
   }
   content.resize(reserve, ' ');
   const std::string header = glbHeader(reserve, binBytes, path);

@@ -8,8 +8,10 @@
 // min/max), unit NORMAL, TEXCOORD_0 (glTF's v points down the image, so v is flipped from the
 // mesh convention) and, on plant parts, _NODE_ID: per vertex the skeleton node it was built
 // from (TriangleMesh::nodeIds; a float scalar holding an exact integer, as glTF forbids unsigned
-// int for application-specific attributes; docs/skeleton-format.md); indices are uint16 when a
-// part has fewer than 65536 vertices, else uint32.
+// int for application-specific attributes; docs/skeleton-format.md); with engine wind data
+// (ExportScene::wind, io/wind_attributes.h) also COLOR_0 (float RGBA: branch level, phase,
+// natural period, leaf flag), _WIND_PIVOT and _WIND_AXIS (float VEC3), docs/engine-wind.md;
+// indices are uint16 when a part has fewer than 65536 vertices, else uint32.
 // Images are embedded as PNG/JPEG buffer views. Nothing unused is written, so the Khronos
 // validator reports no errors and no warnings. The bytes depend only on the input, not on the
 // thread count. The file is replaced atomically (atomic_file.h).
@@ -37,6 +39,7 @@ namespace tendril::io {
 void appendMaterialsAndTextures(const ExportModel& model, tinygltf::Model& gltf);
 
 void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options = {});
-void writeGlb(const ExportModel& model, const std::filesystem::path& path);
+// `wind`: per plant (object i for plant i) its engine wind table, as ExportScene::wind.
+void writeGlb(const ExportModel& model, const std::filesystem::path& path, const WindTables* wind = nullptr);
 
 }  // namespace tendril::io

@@ -30,6 +30,10 @@ struct OutputSettings {
   int lods = 1;
   float lodRatio = 0.45f;
   std::vector<uint64_t> lodTriangles;
+  // Engine wind data in the .glb's vertex attributes (docs/engine-wind.md).
+  bool windData = false;
+  // All of a plant's leaf textures packed into one atlas, its leaves one material (io/leaf_atlas.h).
+  bool leafAtlas = false;
 };
 
 struct Scene {

@@ -117,6 +117,10 @@ const s::Schema<OutputSettings>& outputSchema() {
                                      "levels of detail per plant, LOD0 included (`1`: none)"),
           s::number<OutputSettings>("lod_ratio", &OutputSettings::lodRatio, 0.45, 0.01, 1.0, "", "LOD ratio",
                                     "LODk's triangle budget: LOD0's triangles × lod_ratio^k"),
+          s::boolean<OutputSettings>("leaf_atlas", &OutputSettings::leafAtlas, false, "leaf atlas",
+                                     "pack each plant's leaf textures into one atlas: its leaves are one material"),
+          s::boolean<OutputSettings>("wind_data", &OutputSettings::windData, false, "engine wind data",
+                                     "per-vertex wind attributes in the .glb for a game engine's shader"),
       }};
   return schema;
 }

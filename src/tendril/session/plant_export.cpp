@@ -4,6 +4,7 @@
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
 #include "tendril/io/skeleton_writer.h"
+#include "tendril/wind/engine_wind.h"
 
 #include <algorithm>
 
@@ -16,6 +17,7 @@ io::ExportOptions exportOptions(const scene::OutputSettings& output) {
   options.lods.levels = output.lods;
   options.lods.ratio = output.lodRatio;
   options.lods.triangles = output.lodTriangles;
+  options.leafAtlas = output.leafAtlas;
   return options;
 }
 
@@ -23,6 +25,7 @@ io::ExportScene exportScene(const Session& session, const std::string& source) {
   io::ExportScene out;
   out.plants = session.plants();
   for (const plant::PlantModel& p : out.plants) plant::validate(p, source);
+  if (session.scene().output.windData) out.wind = wind::engineWindTables(out.plants, session.growthFlow());
   if (session.scene().output.includeObstacles) {
     const env::Environment& env = session.environment();
     for (uint32_t id = 0; id < env.obstacleCount(); ++id) {
@@ -41,6 +44,9 @@ std::vector<std::string> writePlantFiles(const Session& session, const std::file
                                          const scene::OutputSettings* output) {
   const io::ExportOptions options = exportOptions(output ? *output : session.scene().output);
   exported = exportScene(session, source);
+  // exportScene follows the session's output; `output` may differ (edit's command-line options).
+  if (!(output ? *output : session.scene().output).windData) exported.wind.clear();
+  else if (exported.wind.empty()) exported.wind = wind::engineWindTables(exported.plants, session.growthFlow());
   std::vector<std::string> written;
   if (formats.count("skeleton")) {
     io::writeSkeleton(exported.plants, outDir / (stem + ".skeleton.json"));
@@ -56,7 +62,7 @@ std::vector<std::string> writePlantFiles(const Session& session, const std::file
   // Both formats write the meshes of one model.
   io::ExportModel model = io::buildExportModel(exported, options);
   if (formats.count("glb")) {
-    io::writeGlb(model, outDir / (stem + ".glb"));
+    io::writeGlb(model, outDir / (stem + ".glb"), &exported.wind);
     written.push_back((outDir / (stem + ".glb")).string());
   }
   if (formats.count("obj")) {

@@ -20,7 +20,8 @@ namespace tendril::session {
 io::ExportOptions exportOptions(const scene::OutputSettings& output);
 
 // Snapshots of every plant, in scene order, each checked with plant::validate (an Error names
-// `source`), and with output.include_obstacles every obstacle's mesh in world space.
+// `source`), with output.include_obstacles every obstacle's mesh in world space, and with
+// output.wind_data every plant's engine wind table (wind/engine_wind.h, docs/engine-wind.md).
 io::ExportScene exportScene(const Session& session, const std::string& source);
 
 // Meshes the session's plants (and the obstacles, if the scene asks) and writes
