@@ -43,6 +43,34 @@ void ClimbSystem::rebuildOccupancy() {
   occupancy_ = std::move(grid);
 }
 
+// Tips are saved as their bytes. Copied member by member into value-initialised records, their
+// padding and an empty support's storage are zero: the same state always saves the same bytes
+// (a copied Tip carries whatever bytes its padding held).
+std::vector<ClimbSystem::Tip> ClimbSystem::savedTips(const std::vector<Tip>& tips) {
+  static_assert(sizeof(Tip) == 152, "a member added to ClimbSystem::Tip must be copied here");
+  std::vector<Tip> out(tips.size());
+  for (size_t i = 0; i < tips.size(); ++i) {
+    const Tip& t = tips[i];
+    Tip& c = out[i];
+    c.id = t.id;
+    c.lastNode = t.lastNode;
+    c.position = t.position;
+    c.dir = t.dir;
+    c.normal = t.normal;
+    c.length = t.length, c.radius = t.radius, c.leafSize = t.leafSize;
+    c.leafThickness = t.leafThickness;
+    c.windAngle = t.windAngle;
+    c.windLength = t.windLength;
+    c.shootStart = t.shootStart;
+    c.segments = t.segments;
+    c.unsupported = t.unsupported;
+    if (t.support) c.support.emplace(*t.support);
+    c.order = t.order;
+    c.startsBranch = t.startsBranch;
+  }
+  return out;
+}
+
 void ClimbSystem::saveState(ArchiveWriter& out) const {
   out.tag(kClimbTag);
   out.u32(step_);
@@ -51,7 +79,7 @@ void ClimbSystem::saveState(ArchiveWriter& out) const {
     plant::savePlantModel(out, p->model);
     out.vector(p->birthStep);
     out.vector(p->nodeEnd);
-    out.vector(p->tips);
+    out.vector(savedTips(p->tips));
     out.u64(p->nextTipId);
     out.boolean(p->capped);
   }

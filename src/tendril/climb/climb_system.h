@@ -114,6 +114,7 @@ class ClimbSystem {
     plant::TipEnd seedEnd = plant::TipEnd::Unknown;
   };
   struct Outcome;
+  static std::vector<Tip> savedTips(const std::vector<Tip>& tips);  // climb_state.cpp
   struct TipRef {
     uint32_t plant;
     uint32_t tip;
