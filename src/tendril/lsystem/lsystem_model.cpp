@@ -34,6 +34,7 @@ class LSystemPlantSystem final : public models::PlantSystem, public models::Grow
     names_.push_back(spec.name);
     growthFlow_.push_back(spec.paramsAs<LSystemParams>()->growthFlow);
     lastGrowth_.push_back(0);
+    segments_.push_back(plants_.back()->segmentModules());
   }
 
   // A new grammar (or derivation length, placement...) for a growing plant: derived afresh
@@ -51,15 +52,17 @@ class LSystemPlantSystem final : public models::PlantSystem, public models::Grow
     names_[plant] = spec.name;
     growthFlow_[plant] = spec.paramsAs<LSystemParams>()->growthFlow;
     lastGrowth_[plant] = plants_[plant]->stepCount();
+    segments_[plant] = plants_[plant]->segmentModules();
   }
 
   void step(const env::Environment& env) override {
     for (size_t i = 0; i < plants_.size(); ++i) {
       LSystem& p = *plants_[i];
       if (p.finished()) continue;
-      const size_t before = p.segmentModules();
       p.step(&env);
-      if (p.segmentModules() > before) lastGrowth_[i] = p.stepCount();
+      const size_t now = p.segmentModules();  // one pass over the string a step
+      if (now > segments_[i]) lastGrowth_[i] = p.stepCount();
+      segments_[i] = now;
     }
   }
 
@@ -95,7 +98,10 @@ class LSystemPlantSystem final : public models::PlantSystem, public models::Grow
     if (in.u64() != plants_.size()) in.fail(at, "the saved L-system plants differ from the session's");
     for (auto& p : plants_) p->loadState(in);
     // When they last grew is not saved: judged from now on.
-    for (size_t i = 0; i < plants_.size(); ++i) lastGrowth_[i] = plants_[i]->stepCount();
+    for (size_t i = 0; i < plants_.size(); ++i) {
+      lastGrowth_[i] = plants_[i]->stepCount();
+      segments_[i] = plants_[i]->segmentModules();
+    }
   }
 
   // A grammar that asks the environment (?E) can be stopped by it (a climber with nothing to
@@ -112,10 +118,11 @@ class LSystemPlantSystem final : public models::PlantSystem, public models::Grow
     r.grown = double(ls.segmentModules());
     r.steps = ls.stepCount();
     r.lastGrowth = std::min(lastGrowth_.at(plant), r.steps);
-    r.complete = ls.finished() || !asksEnvironment(ls.grammar());
+    const bool asks = asksEnvironment(ls.grammar());
+    r.complete = ls.finished() || !asks;
     r.growing = !ls.finished() && r.steps - r.lastGrowth < kStallSteps;
     // Grammars that ask the environment mostly climb: support within this reach of the seed.
-    if (asksEnvironment(ls.grammar())) {
+    if (asks) {
       r.supportReach = kQueryingSupportReach;
       r.unsupportedRun = kQueryingUnsupportedRun;
     }
@@ -150,6 +157,7 @@ class LSystemPlantSystem final : public models::PlantSystem, public models::Grow
   std::vector<std::string> names_;
   std::vector<plant::GrowthFlowSpecies> growthFlow_;
   std::vector<uint32_t> lastGrowth_;  // per plant: the step in which its segment count last rose
+  std::vector<size_t> segments_;      // per plant: its segment count after its last step
 };
 
 std::shared_ptr<const models::ModelParams> readLSystemPlant(JsonObject& o, const std::filesystem::path& baseDir) {
