@@ -27,6 +27,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <map>
@@ -305,12 +306,13 @@ TEST(LodChain, BoundsAndSilhouetteStayCloseToLod0) {
     const Bounds3 b0 = boundsOf(lod0);
     const float diagonal = b0.size().norm();
     const std::vector<Vec3> views = eightViews();
-    // 10 % (issue 26). The sunflower's LOD2 and LOD3 lose 11-14 % of their side views (400 x 400
-    // cells; its leaf primitives lose outline where meshopt_simplify must unlock their borders to
-    // meet the budget): a known shortfall, held here at 15 % so that it does not get worse.
-    const double silhouetteTolerance = std::string(n.name) == "graph sunflower" ? 0.15 : 0.10;
+    // 10 % (issue 26), for every plant: the sunflower's few large leaves and its head stay whole
+    // (simplified, they lost 11-14 % of the side views) and coarser bark rings are widened.
+    const double silhouetteTolerance = 0.10;
     std::vector<ViewFrame> frames;
     std::vector<size_t> area0, leafArea0;
+    double worst = 0.0;  // signed
+    std::string worstAt;
     for (const Vec3& view : views) {
       frames.push_back(viewFrame(lod0, view));
       area0.push_back(silhouette(lod0, frames.back()));
@@ -330,6 +332,11 @@ TEST(LodChain, BoundsAndSilhouetteStayCloseToLod0) {
         SCOPED_TRACE(fmt::format("view {}: {} cells, LOD0 {}", v, area, area0[v]));
         EXPECT_GT(area0[v], 1000u);
         EXPECT_LE(std::abs(double(area) - double(area0[v])), silhouetteTolerance * double(area0[v]));
+        const double difference = (double(area) - double(area0[v])) / double(area0[v]);
+        if (std::abs(difference) > std::abs(worst)) {
+          worst = difference;
+          worstAt = fmt::format("LOD{}, view {}", k + 1, v);
+        }
         if (leafArea0[v] > 0) {
           const size_t leafArea = silhouette(leaves, frames[v]);
           SCOPED_TRACE(fmt::format("leaves: {} cells, LOD0 {}", leafArea, leafArea0[v]));
@@ -337,6 +344,7 @@ TEST(LodChain, BoundsAndSilhouetteStayCloseToLod0) {
         }
       }
     }
+    fmt::print("[ lod ] {}: worst silhouette difference {:+.1f} % ({})\n", n.name, 100.0 * worst, worstAt);
   }
 }
 
@@ -473,6 +481,46 @@ TEST(LodChain, VertexCacheOrderLowersAcmrAndKeepsTheSurface) {
   io::ExportModel single = io::buildExportModel(sceneOf(climbingIvy()), {});
   EXPECT_EQ(single.plantMeshes[0].bark.indices, mesh::buildPlantMesh(climbingIvy(), {}).bark.indices);
   EXPECT_TRUE(single.plantLods[0].empty());
+}
+
+// A mesh of more than 2 × 2^16 triangles is ordered in runs that share no vertices, in
+// parallel: the same result at every thread count, as good for the cache as ordering it whole,
+// the same triangles, every vertex kept and numbered in the order the triangles first use it.
+TEST(LodChain, LargeMeshesAreOrderedInRunsTheSameAtEveryThreadCount) {
+  const TriangleMesh bark = mesh::buildPlantMesh(meshtest::syntheticIvy(6000), {}).bark;
+  ASSERT_GT(bark.triangleCount(), 4u << 16);  // at least four runs
+  auto order = [&] {
+    TriangleMesh m = bark;
+    mesh::optimizeMeshOrder(m);
+    return m;
+  };
+  test::sameAtEveryThreadCount([&] {
+    const TriangleMesh m = order();
+    std::vector<uint32_t> words(m.indices);
+    for (const Vec3& p : m.positions)
+      for (int k = 0; k < 3; ++k) words.push_back(std::bit_cast<uint32_t>(p[k]));
+    for (const Vec3& n : m.normals)
+      for (int k = 0; k < 3; ++k) words.push_back(std::bit_cast<uint32_t>(n[k]));
+    words.insert(words.end(), m.nodeIds.begin(), m.nodeIds.end());
+    return words;
+  });
+  const TriangleMesh ordered = order();
+  std::vector<uint32_t> whole(bark.indices.size());
+  meshopt_optimizeVertexCache(whole.data(), bark.indices.data(), whole.size(), bark.vertexCount());
+  const float acmrWhole = meshopt_analyzeVertexCache(whole.data(), whole.size(), bark.vertexCount(), 16, 0, 0).acmr;
+  SCOPED_TRACE(fmt::format("ACMR {} -> {} (ordered whole: {})", cacheStats(bark).acmr, cacheStats(ordered).acmr,
+                           acmrWhole));
+  EXPECT_LE(cacheStats(ordered).acmr, 1.01f * acmrWhole);
+  EXPECT_EQ(triangleSet(bark), triangleSet(ordered));
+  EXPECT_EQ(ordered.vertexCount(), bark.vertexCount());
+  uint32_t next = 0;
+  bool inOrder = true;
+  for (uint32_t i : ordered.indices) {
+    if (i > next) inOrder = false;
+    if (i == next) ++next;
+  }
+  EXPECT_TRUE(inOrder);
+  EXPECT_EQ(next, ordered.vertexCount());
 }
 
 // --- files ---
@@ -716,3 +764,4 @@ TEST(LodSettings, CommandLine) {
 
 }  // namespace
 }  // namespace tendril
+

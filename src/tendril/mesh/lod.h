@@ -8,17 +8,28 @@
 //      carried stay where they were, re-hung on the nearest node that stays;
 //   2. thinning leaves: fewer leaves (a stratified, nested choice along the branches, at least
 //      one of every shape), each blade larger about its centre so that every shape keeps its
-//      total leaf area; primitives (a graph plant's leaves, seeds, petals) likewise;
-//   3. lowering the tessellation: fewer radial segments and subdivisions, one quad per leaf;
+//      total leaf area; primitives (a graph plant's leaves, seeds, petals) likewise, never
+//      fewer than the fraction f of them (f: the level's budget over LOD0's triangles), so
+//      that the enlarged ones stay within the plant's bounds;
+//   3. lowering the tessellation: fewer radial segments and subdivisions, one quad per leaf,
+//      the branch radii widened so that the coarser rings (polygons inscribed in the circle)
+//      have LOD0's mean width (perimeter / π);
 //   4. simplifying with meshoptimizer (meshopt_simplify, and meshopt_simplifySloppy where the
 //      topology-keeping simplifier stops short) what is still over the bark's and the
-//      primitives' share of the budget.
+//      primitives' share of the budget. Primitive groups made only of kinds too few to thin (a
+//      flower head, a sunflower's dozen large leaves) stay whole while the budget allows: each
+//      is a large part of the outline, and simplifying curved, folded blades pulled their
+//      outlines in (the sunflower lost 11-14 % of its side views); what they take beyond their
+//      share comes out of the other primitives' and the bark's.
 //
 // A level that cannot be brought within its budget (a budget below what one leaf per shape and
 // the roughest bark take) is kept at the fewest triangles reached and marked `overBudget()`;
 // the exporters warn about it. Every level, and LOD0 when a chain is written, then has its
 // triangles ordered for the post-transform vertex cache and its vertices for fetch
-// (optimizeMeshOrder). Everything here is deterministic and independent of the thread count.
+// (optimizeMeshOrder). The levels are made in parallel (each on the budget it has if the levels
+// above meet theirs; a level whose real budget differs is made again), and large meshes are
+// ordered in runs of vertex-disjoint triangles in parallel. Everything here is deterministic
+// and independent of the thread count.
 #pragma once
 
 #include "tendril/mesh/mesh_options.h"
@@ -91,13 +102,17 @@ float thinLeaves(plant::PlantModel& plant, size_t keep);
 
 // The same for primitives (plant::Primitive; a graph plant's leaves, seeds and petals): about
 // `keep` of them, at least one of each mesh, each kept one scaled about the centre of its
-// mesh's bounds so that each mesh's instances keep their total surface. Returns the mean scale.
+// mesh's bounds so that each mesh's instances keep their total surface. Kinds (texture and
+// mesh size) with fewer than 16 instances are kept whole. Returns the mean scale.
 float thinPrimitives(plant::PlantModel& plant, size_t keep);
 
 // Reorders the mesh's triangles for the post-transform vertex cache
 // (meshopt_optimizeVertexCache) and then its vertices in the order the triangles use them
 // (meshopt_optimizeVertexFetchRemap; every per-vertex array follows, unreferenced vertices go).
-// The triangles and the surface are unchanged.
+// The triangles and the surface are unchanged. A mesh of 2^17 triangles or more is cut, where
+// the triangles before use only vertices below those after (a branch chain's tube, a run of
+// leaf quads), into runs of at least 2^16 triangles, ordered each on its own in parallel (the
+// runs depend on the mesh alone); a plant mesh's parts are ordered in parallel.
 void optimizeMeshOrder(TriangleMesh& mesh);
 void optimizeMeshOrder(PlantMesh& mesh);
 
