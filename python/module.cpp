@@ -19,6 +19,7 @@
 #include "tendril/io/export_model.h"
 #include "tendril/lsystem/grammar_files.h"
 #include "tendril/models/species_presets.h"
+#include "tendril/render/impostor_baker.h"
 #include "tendril/render/session_render.h"
 #include "tendril/scene/model_types.h"
 #include "tendril/scene/scene.h"
@@ -159,6 +160,7 @@ std::string materialKind(io::ExportMaterial::Kind k) {
   switch (k) {
     case io::ExportMaterial::Kind::Bark: return "bark";
     case io::ExportMaterial::Kind::Leaf: return "leaf";
+    case io::ExportMaterial::Kind::Impostor: return "impostor";
     default: return "plain";
   }
 }
@@ -406,6 +408,7 @@ std::vector<std::string> presets(const std::string& model) {
 
 PYBIND11_MODULE(_tendril, m) {
   m.doc() = "Tendril: plants that grow, climb, move in the wind and can be edited while they grow.";
+  render::installRendererImpostorBaker();  // output.impostor in Session.export
 
   gErrorType = PyErr_NewExceptionWithDoc(
       "tendril.Error",

@@ -5,6 +5,7 @@
 #include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 #include "tendril/env/mesh_import.h"
+#include "tendril/render/impostor_baker.h"
 
 #include <fmt/format.h>
 
@@ -73,6 +74,7 @@ int main(int argc, char** argv) {
                "Exit codes: 0 success, 2 bad input (files, parameters, arguments), 1 internal error.",
                "tendril"};
   app.set_version_flag("--version", std::string("tendril ") + TENDRIL_VERSION);
+  render::installRendererImpostorBaker();  // --impostor / output.impostor bake with the renderer
   app.require_subcommand(1);
   app.fallthrough(false);
 

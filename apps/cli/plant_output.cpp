@@ -47,11 +47,24 @@ void addLodOptions(CLI::App& sub, LodOptions& options) {
   sub.add_flag("--wind-data", options.windData,
                "Engine wind data in the .glb: per vertex the pivot it bends about, its lever, branch level, phase and "
                "period (COLOR_0, _WIND_PIVOT, _WIND_AXIS; docs/engine-wind.md; sets the scene's output.wind_data)");
+  sub.add_flag("--impostor", options.impostor,
+               "A billboard impostor as each plant's last level of detail: slab quads baked with the renderer "
+               "(colour + normal atlas, alpha-tested; docs/export.md; sets the scene's output.impostor)");
+  sub.add_flag("--instancing", options.instancing,
+               "GPU instancing in the .glb: a graph plant's repeated primitive shapes written once each and drawn "
+               "per copy (EXT_mesh_gpu_instancing, required), where that makes the file smaller (sets the scene's "
+               "output.instancing)");
+  sub.add_flag("--maps", options.maps,
+               "Bark normal and roughness maps and leaf normal maps, made with their textures (glTF normalTexture and "
+               "metallicRoughnessTexture, .obj norm and map_Pr; sets the scene's output.maps)");
 }
 
 void applyLodOptions(const LodOptions& options, scene::OutputSettings& output) {
+  if (options.impostor) output.impostor = true;
   if (options.leafAtlas) output.leafAtlas = true;
   if (options.windData) output.windData = true;
+  if (options.instancing) output.instancing = true;
+  if (options.maps) output.maps = true;
   if (options.lods > 0) {
     output.lods = options.lods;
     output.lodTriangles.clear();

@@ -31,6 +31,9 @@ struct LodOptions {
   double ratio = 0.0;
   bool leafAtlas = false;
   bool windData = false;  // --wind-data: engine wind data in the .glb (sets output.wind_data)
+  bool impostor = false;  // --impostor: a billboard impostor as the last level (sets output.impostor)
+  bool instancing = false;  // --instancing: GPU instancing of repeated primitives (sets output.instancing)
+  bool maps = false;        // --maps: bark normal/roughness and leaf normal maps (sets output.maps)
 };
 void addLodOptions(CLI::App& sub, LodOptions& options);
 // Applies the options to `output`; --lod-ratio without levels of detail (from --lods or the

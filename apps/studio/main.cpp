@@ -4,12 +4,14 @@
 #include "studio.h"
 
 #include "tendril/core/error.h"
+#include "tendril/render/impostor_baker.h"
 
 #include <cstdio>
 #include <exception>
 
 int main(int argc, char** argv) {
   using namespace tendril;
+  render::installRendererImpostorBaker();  // output.impostor in the studio's export
   studio::StudioOptions options;
   try {
     options = studio::parseOptions(std::vector<std::string>(argv + 1, argv + argc));

@@ -1,5 +1,6 @@
 """Blender's own glTF importer (Debian's Blender 3.4, headless) reads what `tendril` exports:
-levels of detail (nodes <plant>_LOD0..3, MSFT_lod), their materials and UVs.
+levels of detail (nodes <plant>_LOD0..3, MSFT_lod), their materials and UVs, the leaf atlas, engine
+wind data and the impostor level (<plant>_LOD4, output.impostor).
 
     blender -b --factory-startup --python tests/blender/test_gltf_import.py -- MODULE_DIR
 
@@ -114,6 +115,69 @@ def run():
             check(f"{name}: COLOR_0's leaf flag is 0 or 1 and both occur",
                   set(numpy.unique(numpy.round(values[:, 3], 3))) == {0.0, 1.0},
                   str(numpy.unique(numpy.round(values[:, 3], 3))[:5]))
+
+    # The impostor (output.impostor): one more level, <plant>_LOD4, its quads in the alpha-clipped
+    # material "impostor" with a base colour and a normal map.
+    scene["output"] = dict(scene["output"], impostor=True)
+    session = tendril.Session(scene, base_dir=os.path.join(REPO, "examples", "scenes"))
+    session.run(80)
+    out = os.path.join(os.path.dirname(out), "impostor.glb")
+    session.export(out)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    result = bpy.ops.import_scene.gltf(filepath=out)
+    check("the importer reads the impostor file", result == {"FINISHED"}, str(result))
+    for name in names:
+        obj = bpy.data.objects.get(f"{name}_LOD4")
+        check(f"{name}: object {name}_LOD4, the impostor", obj is not None and obj.type == "MESH")
+        if obj is None:
+            continue
+        check(f"{name}_LOD4: two triangles per quad", triangles(obj) * 2 == len(obj.data.vertices) and
+              triangles(obj) > 0, f"{triangles(obj)} triangles, {len(obj.data.vertices)} vertices")
+        mats = [m for m in obj.data.materials if m]
+        check(f"{name}_LOD4: the impostor material clips by alpha",
+              len(mats) == 1 and "impostor" in mats[0].name and mats[0].blend_method == "CLIP",
+              str([(m.name, m.blend_method) for m in mats]))
+        nodes = {n.type for n in mats[0].node_tree.nodes} if mats and mats[0].node_tree else set()
+        check(f"{name}_LOD4: colour and normal textures", "TEX_IMAGE" in nodes and "NORMAL_MAP" in nodes, str(nodes))
+
+    # Normal and roughness maps (output.maps): the bark's normal map feeds the shader's normal
+    # through a Normal Map node, its roughness map the roughness; leaves get a normal map too.
+    scene["output"] = dict(scene["output"], impostor=False, maps=True)
+    session = tendril.Session(scene, base_dir=os.path.join(REPO, "examples", "scenes"))
+    session.run(80)
+    out = os.path.join(os.path.dirname(out), "maps.glb")
+    session.export(out)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    result = bpy.ops.import_scene.gltf(filepath=out)
+    check("the importer reads the file with maps", result == {"FINISHED"}, str(result))
+    for kind in ("bark", "leaf"):
+        mats = [m for m in bpy.data.materials if kind in m.name and m.node_tree]
+        bsdf = [n for m in mats for n in m.node_tree.nodes if n.type == "BSDF_PRINCIPLED"]
+        normal = [b for b in bsdf if b.inputs["Normal"].is_linked and
+                  b.inputs["Normal"].links[0].from_node.type == "NORMAL_MAP"]
+        check(f"{kind}: the normal map drives the shader's normal", mats and len(normal) == len(bsdf) > 0,
+              f"{len(normal)} of {len(bsdf)}")
+        if kind == "bark":
+            rough = [b for b in bsdf if b.inputs["Roughness"].is_linked]
+            check("bark: the roughness map drives the roughness", len(rough) == len(bsdf) > 0,
+                  f"{len(rough)} of {len(bsdf)}")
+
+    # GPU instancing (output.instancing): EXT_mesh_gpu_instancing is required and Blender 3.4's
+    # importer does not have it, so it refuses the file (docs/export.md) rather than showing one
+    # copy of each shape.
+    graph = os.path.join(REPO, "examples", "graphs", "fig2.json")
+    out = os.path.join(os.path.dirname(out), "fig.glb")
+    refused = ""
+    try:
+        import subprocess
+        cli = os.path.join(MODULE_DIR, "..", "tendril")
+        subprocess.run([cli, "model", graph, "-o", out, "--instancing", "-q"], check=True)
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        bpy.ops.import_scene.gltf(filepath=out)
+    except RuntimeError as e:
+        refused = str(e)
+    check("an instanced file is refused, naming EXT_mesh_gpu_instancing", "EXT_mesh_gpu_instancing" in refused,
+          refused.splitlines()[0] if refused else "imported")
 
 
 def main():

@@ -4,6 +4,7 @@
 #include "tendril/mesh/lod.h"
 
 #include "support/determinism.h"
+#include "support/eight_views.h"
 #include "support/gltf_validator.h"
 #include "support/run_command.h"
 #include "support/synthetic_plants.h"
@@ -113,22 +114,6 @@ Bounds3 boundsOf(const TriangleMesh& m) {
   Bounds3 b;
   for (uint32_t i : m.indices) b.extend(m.positions[i]);
   return b;
-}
-
-// The eight views the silhouettes are compared from: four round the plant, three from 45° above
-// between them, and straight down.
-std::vector<Vec3> eightViews() {
-  std::vector<Vec3> views;
-  for (int k = 0; k < 4; ++k) {
-    const float a = float(k) * 0.25f * kPi;
-    views.push_back(Vec3(std::cos(a), 0.0f, std::sin(a)));
-  }
-  for (int k = 0; k < 3; ++k) {
-    const float a = (float(k) + 0.5f) * (2.0f / 3.0f) * kPi;
-    views.push_back(Vec3(std::cos(a), -1.0f, std::sin(a)).normalized());
-  }
-  views.push_back(Vec3(0, -1, 0));
-  return views;
 }
 
 // Silhouette area seen along `view`, orthographically: the cells of a res × res grid over the
@@ -305,7 +290,7 @@ TEST(LodChain, BoundsAndSilhouetteStayCloseToLod0) {
     const TriangleMesh lod0 = whole(model.plantMeshes[0]), leaves0 = leavesOf(model.plantMeshes[0]);
     const Bounds3 b0 = boundsOf(lod0);
     const float diagonal = b0.size().norm();
-    const std::vector<Vec3> views = eightViews();
+    const std::vector<Vec3> views = test::eightViews();
     // 10 % (issue 26), for every plant: the sunflower's few large leaves and its head stay whole
     // (simplified, they lost 11-14 % of the side views) and coarser bark rings are widened.
     const double silhouetteTolerance = 0.10;

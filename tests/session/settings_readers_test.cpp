@@ -497,7 +497,7 @@ TEST(SettingsReaders, DocsTablesAgreeWithTheSchemas) {
   expectTableAgrees("scene-format.md", {"### Strokes"}, scene::strokeSchema());
   expectTableAgrees("scene-format.md", {"### Wind"}, scene::windSchema(), {"emitters", "sph"});
   expectTableAgrees("scene-format.md", {"#### Wind emitters"}, scene::emitterSchema());
-  expectTableAgrees("scene-format.md", {"## Output"}, scene::outputSchema(), {"wind_animation", "lod_triangles"});
+  expectTableAgrees("scene-format.md", {"## Output"}, scene::outputSchema(), {"wind_animation", "lod_triangles", "impostor"});
   expectTableAgrees("scene-format.md", {"#### Wind animation"}, scene::windAnimationSchema());
   expectTableAgrees("particles.md", {"## Species keys"}, particles::particleSpeciesSchema(), {"leaf.", "bark."});
   expectTableAgrees("species.md", {"### Shoot size (eq. 8)", "### Climbing", "### Branching (§3.7)"},

@@ -3,6 +3,7 @@
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
+#include "tendril/io/material_maps.h"
 
 #include <fmt/format.h>
 
@@ -95,13 +96,37 @@ class ModelBuilder {
     return static_cast<int>(model_.textures.size() - 1);
   }
 
+  // A map made from the image of texture `colour` (already in the model): "<spec>#normal" or
+  // "<spec>#roughness", made once (io/material_maps.h), with the colour texture's wrap mode.
+  int mapTexture(int colour, bool normal, float reliefPixels) {
+    const ExportTexture t = model_.textures[size_t(colour)];
+    const std::string spec = model_.images[size_t(t.image)].spec;
+    const std::string mapSpec = spec + (normal ? "#normal" : "#roughness");
+    int image = -1;
+    for (size_t i = 0; i < model_.images.size(); ++i)
+      if (model_.images[i].spec == mapSpec) image = static_cast<int>(i);
+    if (image < 0) {
+      const EncodedImage& encoded = model_.images[size_t(t.image)].image;
+      const HeightField field = spec == "builtin:bark" ? barkHeightField(encoded.width)
+                                                       : luminanceHeightField(decodeImage(encoded.bytes, spec));
+      const Image map = normal ? normalMap(field, reliefPixels, t.repeat) : roughnessMap(field);
+      model_.images.push_back({mapSpec, {"image/png", encodePng(map), map.width, map.height}});
+      image = static_cast<int>(model_.images.size() - 1);
+    }
+    for (size_t k = 0; k < model_.textures.size(); ++k)
+      if (model_.textures[k].image == image && model_.textures[k].repeat == t.repeat) return static_cast<int>(k);
+    model_.textures.push_back({image, t.repeat});
+    return static_cast<int>(model_.textures.size() - 1);
+  }
+
   // The index of an equal material, or of `m` added under a unique version of its name.
   int material(ExportMaterial m) {
     for (size_t i = 0; i < model_.materials.size(); ++i) {
       const ExportMaterial& o = model_.materials[i];
       if (o.kind == m.kind && o.texture == m.texture && o.baseColor == m.baseColor && o.roughness == m.roughness &&
           o.metallic == m.metallic && o.alphaMask == m.alphaMask && o.doubleSided == m.doubleSided &&
-          o.diffuseTransmission == m.diffuseTransmission)
+          o.diffuseTransmission == m.diffuseTransmission && o.normalTexture == m.normalTexture &&
+          o.roughnessTexture == m.roughnessTexture)
         return static_cast<int>(i);
     }
     std::string base = m.name;
@@ -181,6 +206,21 @@ PlantParts plantParts(const mesh::PlantMesh& mesh, const std::vector<mesh::LodLe
   return parts;
 }
 
+void addInstancing(PlantParts& parts, const PlantInstancing& instancing) {
+  parts.primitiveInstancing = instancing.instanced;
+  parts.instancedShapes.clear();
+  for (const InstancedShape& s : instancing.shapes) parts.instancedShapes.emplace_back(s.group, s.name);
+}
+
+PlantInstancing plantInstancing(const ExportScene& scene, size_t index, const ExportOptions& options,
+                                const mesh::PlantMesh& mesh) {
+  if (!options.instancing) return {};
+  InstancingCost cost;
+  cost.wind = index < scene.wind.size() && !scene.wind[index].empty();
+  cost.cacheOrder = options.lods.levels > 1 && mesh.triangleCount() > 0;  // as meshPlantLevels orders LOD0
+  return instancePrimitives(scene.plants[index], mesh.primitives, cost);
+}
+
 PlantParts plantParts(const mesh::PlantMesh& mesh) {
   PlantParts parts;
   parts.bark = !mesh.bark.empty();
@@ -208,7 +248,7 @@ TexturePreload preloadTextures(const ExportScene& scene) {
 }
 
 ExportModel assembleExportModel(const ExportScene& scene, const std::vector<PlantParts>& parts,
-                                TexturePreload& textures, LeafAtlases* atlases) {
+                                TexturePreload& textures, LeafAtlases* atlases, bool maps) {
   assert(parts.size() == scene.plants.size());
   assert(!atlases || atlases->plants.size() == scene.plants.size());
   ExportModel model;
@@ -234,6 +274,10 @@ ExportModel assembleExportModel(const ExportScene& scene, const std::vector<Plan
         m.baseColor = clampedColor(p.bark.color, object.name, "bark");
       } else {
         m.texture = builder.texture(p.bark.texture, true);  // the texture carries the colour
+        if (maps) {
+          m.normalTexture = builder.mapTexture(m.texture, true, kBarkReliefPixels);
+          m.roughnessTexture = builder.mapTexture(m.texture, false, 0.0f);
+        }
       }
       object.parts.push_back({"bark", nullptr, builder.material(std::move(m)), PartSource::Bark, 0});
     }
@@ -249,6 +293,8 @@ ExportModel assembleExportModel(const ExportScene& scene, const std::vector<Plan
         m.baseColor = Vec4(atlas.tint.x(), atlas.tint.y(), atlas.tint.z(), 1.0f);
         m.roughness = 0.5f;
         m.texture = builder.atlasTexture(atlas.spec, atlas.image);
+        // The atlas's normal map: made from the atlas, so it has the same rectangles.
+        if (maps) m.normalTexture = builder.mapTexture(m.texture, true, kLeafReliefPixels);
         m.alphaMask = true;
         m.doubleSided = true;
         m.diffuseTransmission = kLeafDiffuseTransmission;
@@ -262,6 +308,7 @@ ExportModel assembleExportModel(const ExportScene& scene, const std::vector<Plan
       m.baseColor = clampedColor(shape.tint, object.name, fmt::format("leaf shape {}", s));
       m.roughness = 0.5f;  // a glossy cuticle
       m.texture = builder.texture(shape.texture, false);
+      if (maps) m.normalTexture = builder.mapTexture(m.texture, true, kLeafReliefPixels);
       m.alphaMask = true;
       m.doubleSided = true;
       object.parts.push_back({fmt::format("leaves-{}", s), nullptr, builder.material(std::move(m)),
@@ -277,7 +324,13 @@ ExportModel assembleExportModel(const ExportScene& scene, const std::vector<Plan
       if (!g.texture.empty()) m.texture = builder.texture(g.texture, true);
       std::string name = m.name;
       object.parts.push_back({name, nullptr, builder.material(std::move(m)), PartSource::Primitive, uint32_t(k)});
+      if (k < pm.primitiveInstancing.size()) object.parts.back().instancing = pm.primitiveInstancing[k];
     }
+    // Instanced shapes, in their primitive group's material.
+    for (const auto& [group, name] : pm.instancedShapes)
+      for (const ExportPart& part : object.parts)
+        if (part.source == PartSource::Primitive && part.index == group)
+          object.instanced.push_back({name, part.material, group, nullptr});
     // Lower levels: the parts of LOD0 that still have triangles there, with LOD0's materials.
     for (const PlantParts& level : pm.lods) {
       std::vector<ExportPart>& lodParts = object.lods.emplace_back();
@@ -286,7 +339,10 @@ ExportModel assembleExportModel(const ExportScene& scene, const std::vector<Plan
                          : part.source == PartSource::Leaves ? part.index < level.leaves.size() && level.leaves[part.index]
                                                              : part.index < level.primitiveTriangles.size() &&
                                                                    level.primitiveTriangles[part.index];
-        if (has) lodParts.push_back(part);
+        if (has) {
+          lodParts.push_back(part);
+          lodParts.back().instancing = 0;  // lower levels are baked (io/instancing.h)
+        }
       }
     }
     if (!pm.lods.empty()) object.screenCoverage = mesh::lodScreenCoverage(pm.levelTriangles);
@@ -313,6 +369,7 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
   // Textures load (or are generated) while the plants are meshed: both take a while for a
   // large scene and neither needs the other.
   mesh::validateLodSettings(options.lods, "export options");
+  impostorBakerFor(options);  // no baker: an error before the work
   std::vector<mesh::PlantMesh> meshes;
   std::vector<std::vector<mesh::LodLevel>> lods;
   TexturePreload textures;
@@ -345,16 +402,21 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       for (mesh::LodLevel& level : lods[i]) applyLeafAtlas(atlases, atlases.plants[i], level.mesh);
     }, 1);
   }
+  std::vector<PlantInstancing> instancing(meshes.size());
+  if (options.instancing)
+    parallelFor(0, meshes.size(), [&](size_t i) { instancing[i] = plantInstancing(scene, i, options, meshes[i]); }, 1);
   std::vector<PlantParts> parts;
   parts.reserve(meshes.size());
   for (size_t i = 0; i < meshes.size(); ++i) {
     parts.push_back(plantParts(meshes[i], lods[i]));
+    addInstancing(parts.back(), instancing[i]);
     for (const std::string& w : lodBudgetWarnings(scene.plants[i], i, lods[i])) log::warn("{}", w);
   }
-  ExportModel model = assembleExportModel(scene, parts, textures, options.leafAtlas ? &atlases : nullptr);
+  ExportModel model = assembleExportModel(scene, parts, textures, options.leafAtlas ? &atlases : nullptr, options.maps);
   model.leafAtlases = std::move(atlases);
   model.plantMeshes = std::move(meshes);
   model.plantLods = std::move(lods);
+  model.plantInstancing = std::move(instancing);
   auto meshOf = [](const mesh::PlantMesh& pm, const ExportPart& part) {
     return part.source == PartSource::Bark     ? &pm.bark
            : part.source == PartSource::Leaves ? &pm.leaves[part.index]
@@ -362,10 +424,25 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
   };
   for (size_t i = 0; i < scene.plants.size(); ++i) {
     ExportObject& object = model.objects[i];
-    for (ExportPart& part : object.parts) part.mesh = meshOf(model.plantMeshes[i], part);
+    for (ExportPart& part : object.parts) {
+      part.mesh = meshOf(model.plantMeshes[i], part);
+      if (part.instancing == 1) part.rest = &model.plantInstancing[i].rest[part.index];
+    }
+    for (size_t k = 0; k < object.instanced.size(); ++k) object.instanced[k].shape = &model.plantInstancing[i].shapes[k];
+    // Normal-mapped parts carry their tangents (glTF TANGENT; the validator warns about
+    // tangent spaces left to the reader, which need not agree between readers).
+    if (options.maps)
+      for (size_t level = 0; level < object.levels(); ++level)
+        for (ExportPart& part : level == 0 ? object.parts : object.lods[level - 1]) {
+          const ExportMaterial& m = model.materials[size_t(part.material)];
+          if (m.normalTexture < 0 || !part.mesh || part.mesh->uvs.empty() || part.mesh->normals.empty()) continue;
+          model.mapTangents.push_back(std::make_unique<std::vector<Vec4>>(computeTangents(*part.mesh)));
+          part.tangents = model.mapTangents.back().get();
+        }
     for (size_t k = 0; k < object.lods.size(); ++k)
       for (ExportPart& part : object.lods[k]) part.mesh = meshOf(model.plantLods[i][k].mesh, part);
   }
+  addImpostors(scene, options, model);
   return model;
 }
 

@@ -4,12 +4,14 @@
 #pragma once
 
 #include "tendril/io/export_scene.h"
+#include "tendril/io/instancing.h"
 #include "tendril/io/leaf_atlas.h"
 #include "tendril/io/texture.h"
 #include "tendril/mesh/plant_mesh.h"
 
 #include <cstdint>
 #include <exception>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -26,13 +28,16 @@ struct ExportTexture {
 };
 
 struct ExportMaterial {
-  enum class Kind { Bark, Leaf, Plain };
+  enum class Kind { Bark, Leaf, Plain, Impostor };
   Kind kind = Kind::Plain;
   std::string name;
   Vec4 baseColor = Vec4::Ones();  // linear RGBA factor, in [0, 1]
   float roughness = 1.0f;
   float metallic = 0.0f;
   int texture = -1;                // index into ExportModel::textures
+  int normalTexture = -1;          // a tangent-space normal map (impostors), index into textures
+  // With ExportOptions::maps: roughness in G, metal 0 in B (glTF metallicRoughnessTexture; bark).
+  int roughnessTexture = -1;
   bool alphaMask = false;          // leaves: cut out where texture alpha < 0.5
   bool doubleSided = false;
   // KHR_materials_diffuse_transmission: the share of diffuse light let through (leaf atlases'
@@ -50,6 +55,21 @@ struct ExportPart {
   int material = 0;
   PartSource source = PartSource::Mesh;
   uint32_t index = 0;  // leaf shape id (Leaves) or primitive group (Primitive)
+  // Per vertex xyz the tangent along +U, w the bitangent's sign (glTF TANGENT): impostor quads.
+  const std::vector<Vec4>* tangents = nullptr;
+  // GPU instancing (LOD0 primitive parts; ExportObject::instanced): 0 the .glb bakes `mesh`;
+  // 1 some of the group's primitives are instances and the .glb bakes the others, `rest`
+  // (null in an assembled model); 2 all are, and the .glb has no such part. The .obj bakes `mesh`.
+  uint8_t instancing = 0;
+  const TriangleMesh* rest = nullptr;
+};
+
+// A primitive shape written once and drawn at each of its copies (EXT_mesh_gpu_instancing).
+struct ExportInstanced {
+  std::string name;  // the shape's (its primitive mesh's) name
+  int material = 0;  // its primitive group's
+  uint32_t group = 0;
+  const InstancedShape* shape = nullptr;  // points into ExportModel; null in an assembled model
 };
 
 struct ExportObject {
@@ -60,6 +80,8 @@ struct ExportObject {
   // it gives way to the next (mesh::lodScreenCoverage). Empty without a LOD chain.
   std::vector<std::vector<ExportPart>> lods;
   std::vector<float> screenCoverage;
+  // With ExportOptions::instancing: LOD0's instanced primitive shapes (a node each, under LOD0's).
+  std::vector<ExportInstanced> instanced;
 
   size_t levels() const { return 1 + lods.size(); }
   const std::vector<ExportPart>& partsOf(size_t level) const { return level == 0 ? parts : lods[level - 1]; }
@@ -86,11 +108,26 @@ struct ExportModel {
   std::vector<ExportImage> images;
   // With ExportOptions::leafAtlas: each plant's atlas layout (its image moved into `images`).
   LeafAtlases leafAtlases;
+  // With ExportOptions::impostor: per scene plant its impostor (its object's last level, its
+  // atlas images moved into `images`). Empty otherwise.
+  std::vector<Impostor> impostors;
+  // With ExportOptions::instancing: per scene plant, its LOD0 primitives' instancing (empty: none).
+  std::vector<PlantInstancing> plantInstancing;
+  // With ExportOptions::maps: the TANGENT arrays of the parts whose material has a normal map
+  // (ExportPart::tangents points here; io/material_maps.h computeTangents).
+  std::vector<std::unique_ptr<std::vector<Vec4>>> mapTangents;
 };
 
 // Throws Error for invalid plants or options and for textures that cannot be read. Levels
 // over their triangle budget are warned about (lodBudgetWarnings).
 ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& options);
+
+// With ExportOptions::impostor: the installed baker (an Error when there is none, or the
+// settings are out of range); null without.
+std::shared_ptr<ImpostorBaker> impostorBakerFor(const ExportOptions& options);
+// Bakes each plant's impostor (from its LOD0 parts, as `model` has them) and adds it as its
+// object's last level, with its material, textures and images (nothing without the option).
+void addImpostors(const ExportScene& scene, const ExportOptions& options, ExportModel& model);
 
 // Meshes one plant as the exporters do: LOD0 into `mesh` and, with a LOD chain, its lower levels
 // into `lods` (then every level in vertex cache and fetch order).
@@ -112,9 +149,19 @@ struct PlantParts {
   // With levels of detail: the same of LOD1, LOD2, ... and every level's triangle count.
   std::vector<PlantParts> lods;
   std::vector<size_t> levelTriangles;
+  // With instancing (LOD0): per primitive group PlantInstancing::instanced, and the instanced
+  // shapes' groups and names in file order.
+  std::vector<uint8_t> primitiveInstancing;
+  std::vector<std::pair<uint32_t, std::string>> instancedShapes;
 };
 PlantParts plantParts(const mesh::PlantMesh& mesh);
 PlantParts plantParts(const mesh::PlantMesh& mesh, const std::vector<mesh::LodLevel>& lods);
+// Records a plant's instancing in its parts.
+void addInstancing(PlantParts& parts, const PlantInstancing& instancing);
+// The instancing the exporters give plant `index` of `scene` meshed as `mesh` (LOD0) with
+// `options` (none without ExportOptions::instancing).
+PlantInstancing plantInstancing(const ExportScene& scene, size_t index, const ExportOptions& options,
+                                const mesh::PlantMesh& mesh);
 
 // The textures a scene's plants use, loaded in parallel ahead of the model that needs them; a
 // texture that fails is reported when a part first uses it.
@@ -131,7 +178,9 @@ TexturePreload preloadTextures(const ExportScene& scene);
 // none). Takes the preloaded textures it uses. Throws as buildExportModel. With `atlases`
 // (whose plant meshes went through applyLeafAtlas), a plant's leaves are one part, "leaves",
 // with the material of its atlas, whose image it takes.
+// With `maps` (ExportOptions::maps), bark and leaf materials get normal maps and the bark a
+// roughness map (io/material_maps.h), made from their textures.
 ExportModel assembleExportModel(const ExportScene& scene, const std::vector<PlantParts>& parts,
-                                TexturePreload& textures, LeafAtlases* atlases = nullptr);
+                                TexturePreload& textures, LeafAtlases* atlases = nullptr, bool maps = false);
 
 }  // namespace tendril::io

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "tendril/core/triangle_mesh.h"
+#include "tendril/io/impostor.h"
 #include "tendril/io/wind_attributes.h"
 #include "tendril/mesh/lod.h"
 #include "tendril/mesh/mesh_options.h"
@@ -35,6 +36,16 @@ struct ExportOptions {
   // Each plant's leaf textures packed into one atlas and its leaves (every level) one part with
   // one material, UVs remapped into the atlas (io/leaf_atlas.h).
   bool leafAtlas = false;
+  // The .glb writes a graph plant's repeated primitive shapes once each, drawn at every copy by
+  // EXT_mesh_gpu_instancing, where that makes the file smaller (io/instancing.h; LOD0 only).
+  bool instancing = false;
+  // Bark normal and roughness maps and leaf normal maps made with their textures
+  // (io/material_maps.h; normalTexture, metallicRoughnessTexture; .obj norm, map_Pr).
+  bool maps = false;
+  // A last level of detail after the chain: the plant as a slab billboard cloud baked by the
+  // installed ImpostorBaker (io/impostor.h); with it the .glb is written from one ExportModel
+  // (not streamed). Without an installed baker, asking for it is an Error.
+  ImpostorSettings impostor;
 };
 
 inline ExportOptions defaultExportOptions() { return {}; }

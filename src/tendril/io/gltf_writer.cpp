@@ -225,6 +225,11 @@ tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBu
     prim.attributes["NORMAL"] = b.accessor(nv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
     if (mesh) jobs->push_back({CopyJob::Kind::Bytes, mesh->normals.data(), n * sizeof(Vec3), b.offsetOf(nv)});
   }
+  if (part.tangents && part.tangents->size() == n) {  // impostor quads (io/impostor.h)
+    int tv = b.view(n * sizeof(Vec4), kArrayBuffer);
+    prim.attributes["TANGENT"] = b.accessor(tv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC4, n);
+    if (mesh) jobs->push_back({CopyJob::Kind::Bytes, part.tangents->data(), n * sizeof(Vec4), b.offsetOf(tv)});
+  }
   if (g.uvs) {
     int tv = b.view(n * sizeof(Vec2), kArrayBuffer);
     prim.attributes["TEXCOORD_0"] = b.accessor(tv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, n);
@@ -263,6 +268,71 @@ tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBu
   return prim;
 }
 
+// What the JSON says of an instanced shape (io/instancing.h): its mesh's arrays and its copies.
+struct InstanceGeometry {
+  PartGeometry shape;
+  size_t instances = 0;
+  bool nodeIds = false;
+  bool wind = false;  // per copy: _WIND_COLOR, _WIND_PIVOT, _WIND_AXIS
+};
+
+InstanceGeometry instanceGeometryOf(const InstancedShape& s, bool wind) {
+  return {geometryOf(s.shape), s.instances(), !s.nodeIds.empty(), wind && !s.nodeIds.empty()};
+}
+
+// The node of an instanced shape (named `name`): its mesh of one primitive, laid out as addPart
+// lays out a part, then its instance attributes in the order their bytes are written:
+// TRANSLATION, ROTATION, SCALE, _NODE_ID, and with wind data _WIND_COLOR (what COLOR_0 holds
+// for a baked vertex), _WIND_PIVOT, _WIND_AXIS. With `shape`, the copy jobs that write them.
+tinygltf::Node addInstanced(const ExportInstanced& inst, const std::string& name, const InstanceGeometry& g,
+                            GlbBuilder& b, tinygltf::Model& gltf, const InstancedShape* shape,
+                            std::vector<CopyJob>* jobs, const std::vector<WindVertexNode>* wind) {
+  const ExportPart part{inst.name, nullptr, inst.material, PartSource::Primitive, inst.group};
+  tinygltf::Mesh mesh;
+  mesh.name = name;
+  mesh.primitives.push_back(addPart(part, g.shape, b, gltf, shape ? &shape->shape : nullptr, jobs));
+  gltf.meshes.push_back(std::move(mesh));
+  tinygltf::Node node;
+  node.name = name;
+  node.mesh = static_cast<int>(gltf.meshes.size() - 1);
+  const size_t n = g.instances;
+  tinygltf::Value::Object attributes;
+  auto add = [&](const char* semantic, int type, size_t bytes, CopyJob job) {
+    const int v = b.view(n * bytes, 0);
+    attributes[semantic] = tinygltf::Value(b.accessor(v, TINYGLTF_COMPONENT_TYPE_FLOAT, type, n));
+    if (shape) {
+      job.offset = b.offsetOf(v);
+      jobs->push_back(job);
+    }
+  };
+  const bool data = shape != nullptr;
+  add("TRANSLATION", TINYGLTF_TYPE_VEC3, sizeof(Vec3),
+      {CopyJob::Kind::Bytes, data ? shape->translation.data() : nullptr, n * sizeof(Vec3)});
+  add("ROTATION", TINYGLTF_TYPE_VEC4, sizeof(Vec4),
+      {CopyJob::Kind::Bytes, data ? shape->rotation.data() : nullptr, n * sizeof(Vec4)});
+  add("SCALE", TINYGLTF_TYPE_VEC3, sizeof(Vec3), {CopyJob::Kind::Bytes, data ? shape->scale.data() : nullptr, n * sizeof(Vec3)});
+  if (g.nodeIds)
+    add("_NODE_ID", TINYGLTF_TYPE_SCALAR, sizeof(float),
+        {CopyJob::Kind::NodeId, data ? shape->nodeIds.data() : nullptr, n});
+  if (g.wind) {
+    if (data && !wind) throw Error("", "", "cannot write .glb: instances with wind data have no wind table (internal error)");
+    const std::pair<const char*, CopyJob::Kind> views[3] = {{"_WIND_COLOR", CopyJob::Kind::WindColor},
+                                                            {"_WIND_PIVOT", CopyJob::Kind::WindPivot},
+                                                            {"_WIND_AXIS", CopyJob::Kind::WindAxis}};
+    for (const auto& [semantic, kind] : views)
+      add(semantic, kind == CopyJob::Kind::WindColor ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3, windBytes(kind),
+          {kind, data ? shape->nodeIds.data() : nullptr, n, 0, data ? wind->data() : nullptr, data ? wind->size() : 0,
+           false});
+  }
+  tinygltf::Value::Object ext;
+  ext["attributes"] = tinygltf::Value(std::move(attributes));
+  node.extensions["EXT_mesh_gpu_instancing"] = tinygltf::Value(std::move(ext));
+  return node;
+}
+
+// The mesh the .glb bakes of a part (io/instancing.h: a primitive group's non-instanced rest).
+const TriangleMesh* bakedMesh(const ExportPart& part) { return part.instancing == 1 ? part.rest : part.mesh; }
+
 std::vector<double> toDoubles(const Vec4& v) { return {v.x(), v.y(), v.z(), v.w()}; }
 
 }  // namespace
@@ -275,6 +345,8 @@ void appendMaterialsAndTextures(const ExportModel& model, tinygltf::Model& gltf)
     g.pbrMetallicRoughness.metallicFactor = m.metallic;
     g.pbrMetallicRoughness.roughnessFactor = m.roughness;
     g.pbrMetallicRoughness.baseColorTexture.index = m.texture;
+    if (m.normalTexture >= 0) g.normalTexture.index = m.normalTexture;  // impostors; bark and leaf maps
+    if (m.roughnessTexture >= 0) g.pbrMetallicRoughness.metallicRoughnessTexture.index = m.roughnessTexture;
     if (m.alphaMask) {
       g.alphaMode = "MASK";
       g.alphaCutoff = 0.5;
@@ -323,9 +395,12 @@ namespace {
 // imageBytes[i] is the encoded size of image i. Views are laid out in the order the bytes are
 // written: every part in object order, then the images. With `jobs`, the copy jobs that write
 // them (every part then needs its mesh; plant o's wind data comes from windTableOf(wind, o)).
-template <class Geometry>
-void describe(const ExportModel& model, Geometry&& geometry, const std::vector<size_t>& imageBytes,
-              GlbBuilder& builder, tinygltf::Model& gltf, std::vector<CopyJob>* jobs, const WindTables* wind) {
+// instanceGeometry(o, k) describes instanced shape k of object o (its nodes follow the object's
+// levels, children of LOD0's node; their bytes follow the object's parts).
+template <class Geometry, class InstGeometry>
+void describe(const ExportModel& model, Geometry&& geometry, InstGeometry&& instanceGeometry,
+              const std::vector<size_t>& imageBytes, GlbBuilder& builder, tinygltf::Model& gltf,
+              std::vector<CopyJob>* jobs, const WindTables* wind) {
   gltf.asset.version = "2.0";
   gltf.asset.generator = "Tendril " TENDRIL_VERSION;
   tinygltf::Scene scene;
@@ -338,12 +413,13 @@ void describe(const ExportModel& model, Geometry&& geometry, const std::vector<s
     for (size_t level = 0; level < object.levels(); ++level) {
       tinygltf::Node node;
       node.name = levelName(object, level);
-      if (!object.partsOf(level).empty()) {
-        tinygltf::Mesh mesh;
-        mesh.name = node.name;
-        for (const ExportPart& part : object.partsOf(level))
-          mesh.primitives.push_back(addPart(part, geometry(o, part), builder, gltf, jobs ? part.mesh : nullptr, jobs,
-                                            windTableOf(wind, o)));
+      tinygltf::Mesh mesh;
+      mesh.name = node.name;
+      for (const ExportPart& part : object.partsOf(level))
+        if (part.instancing != 2)  // a primitive group all of whose copies are instances has no baked part
+          mesh.primitives.push_back(addPart(part, geometry(o, part), builder, gltf, jobs ? bakedMesh(part) : nullptr,
+                                            jobs, windTableOf(wind, o)));
+      if (!mesh.primitives.empty()) {
         gltf.meshes.push_back(std::move(mesh));
         node.mesh = static_cast<int>(gltf.meshes.size() - 1);
       }
@@ -358,7 +434,22 @@ void describe(const ExportModel& model, Geometry&& geometry, const std::vector<s
       extras["MSFT_screencoverage"] = tinygltf::Value(std::move(coverage));
       gltf.nodes[size_t(first)].extensions["MSFT_lod"] = tinygltf::Value(std::move(lod));
       gltf.nodes[size_t(first)].extras = tinygltf::Value(std::move(extras));
-      if (gltf.extensionsUsed.empty()) gltf.extensionsUsed.push_back("MSFT_lod");
+      if (std::find(gltf.extensionsUsed.begin(), gltf.extensionsUsed.end(), "MSFT_lod") == gltf.extensionsUsed.end())
+        gltf.extensionsUsed.push_back("MSFT_lod");
+    }
+    // Instanced shapes: children of LOD0's node. Required: a reader without the extension would
+    // draw one copy of each shape, at the plant's origin (docs/export.md).
+    for (size_t k = 0; k < object.instanced.size(); ++k) {
+      const ExportInstanced& inst = object.instanced[k];
+      const std::string name = fmt::format("{}-{}", levelName(object, 0), inst.name);
+      gltf.nodes.push_back(addInstanced(inst, name, instanceGeometry(o, k), builder, gltf,
+                                        jobs ? inst.shape : nullptr, jobs, windTableOf(wind, o)));
+      gltf.nodes[size_t(first)].children.push_back(static_cast<int>(gltf.nodes.size() - 1));
+      const std::string ext = "EXT_mesh_gpu_instancing";
+      if (std::find(gltf.extensionsUsed.begin(), gltf.extensionsUsed.end(), ext) == gltf.extensionsUsed.end()) {
+        gltf.extensionsUsed.push_back(ext);
+        gltf.extensionsRequired.push_back(ext);
+      }
     }
     scene.nodes.push_back(first);
   }
@@ -432,7 +523,10 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path, const
   std::vector<CopyJob> jobs;
   describe(
       model,
-      [&](size_t o, const ExportPart& part) { return geometryOf(*part.mesh, windTableOf(wind, o) != nullptr); },
+      [&](size_t o, const ExportPart& part) { return geometryOf(*bakedMesh(part), windTableOf(wind, o) != nullptr); },
+      [&](size_t o, size_t k) {
+        return instanceGeometryOf(*model.objects[o].instanced[k].shape, windTableOf(wind, o) != nullptr);
+      },
       imageSizes(model), builder, gltf, &jobs, wind);
   // Every view is streamed from the meshes into the file, so that the geometry is never copied
   // into a second in-memory buffer (hundreds of MB for a large plant).
@@ -474,7 +568,7 @@ namespace {
 // counted as if every one were non-empty, materials once per distinct look. With `levels` of
 // detail, a plant's node, mesh and parts come once per level (its names 5 bytes longer), and
 // LOD0's node lists the others (MSFT_lod: ten digits per id, 24 characters per coverage).
-size_t jsonAllowance(const ExportScene& scene, size_t levels, bool leafAtlas) {
+size_t jsonAllowance(const ExportScene& scene, size_t levels, bool leafAtlas, bool instancing, bool maps = false) {
   constexpr size_t kPart = 1300, kMaterial = 400, kImage = 200, kObject = 80, kEscape = 6;
   // Engine wind data: three more accessors and views per plant part (COLOR_0, _WIND_PIVOT, _WIND_AXIS).
   const size_t windPart = scene.wind.empty() ? 0 : 800;
@@ -483,13 +577,13 @@ size_t jsonAllowance(const ExportScene& scene, size_t levels, bool leafAtlas) {
   auto image = [&](const std::string& spec) {
     if (!spec.empty() && std::find(images.begin(), images.end(), spec) == images.end()) {
       images.push_back(spec);
-      bytes += kImage + kEscape * spec.size();
+      bytes += (maps ? 3 : 1) * (kImage + kEscape * (spec.size() + 10));  // with maps: normal and roughness too
     }
   };
   auto material = [&](std::string look, size_t nameLength) {
     if (std::find(materials.begin(), materials.end(), look) == materials.end()) {
       materials.push_back(std::move(look));
-      bytes += kMaterial + kEscape * (nameLength + 16);  // the name, made unique by a suffix
+      bytes += kMaterial + kEscape * (nameLength + 16) + (maps ? 120 : 0);  // the name made unique; map indices
     }
   };
   auto colour = [](const Vec3& c) { return fmt::format("{},{},{}", c.x(), c.y(), c.z()); };
@@ -516,7 +610,8 @@ size_t jsonAllowance(const ExportScene& scene, size_t levels, bool leafAtlas) {
         ++partCount;
         image(shape.texture);
         material(fmt::format("leaf|{}|{}", shape.texture, colour(shape.tint)), 5 + shape.texture.size());
-        if (leafAtlas) bytes += kImage + kMaterial + kEscape * (shape.texture.size() + 64);  // its share of the atlas
+        if (leafAtlas)  // its share of the atlas (and of its normal map)
+          bytes += (maps ? 2 : 1) * kImage + kMaterial + kEscape * (shape.texture.size() + 64);
       }
     for (const plant::PrimitiveMesh& m : p.meshes) {
       ++partCount;
@@ -527,6 +622,18 @@ size_t jsonAllowance(const ExportScene& scene, size_t levels, bool leafAtlas) {
     // node and mesh names
     bytes += levels * (kObject + 2 * kEscape * (std::max<size_t>(p.name.size(), 16) + names) + (kPart + windPart) * partCount);
     if (levels > 1) bytes += 96 + 40 * levels;
+    // Instancing: per primitive mesh, a node with a mesh of one part and up to seven instance
+    // accessors and views (named after the plant's LOD0 and the mesh).
+    // Only a mesh placed more than once can be.
+    if (instancing) {
+      std::vector<uint32_t> uses(p.meshes.size(), 0);
+      for (const plant::Primitive& pr : p.primitives)
+        if (pr.mesh < uses.size()) ++uses[pr.mesh];
+      for (size_t k = 0; k < p.meshes.size(); ++k)
+        if (uses[k] > 1)
+          bytes += 128 + kObject + kPart + windPart + 1500 +
+                   2 * kEscape * (std::max<size_t>(p.name.size(), 16) + 5 + p.meshes[k].name.size() + 1);
+    }
   }
   for (const NamedMesh& m : scene.meshes) {
     bytes += kObject + kPart + 2 * kEscape * std::max<size_t>(m.name.size(), 16);
@@ -562,6 +669,29 @@ void writePart(const TriangleMesh& m, AtomicFileWriter& out, uint64_t& at, std::
     view(CopyJob::Kind::Index16, m.indices.data(), ni, ni * sizeof(uint16_t));
   else
     view(CopyJob::Kind::Bytes, m.indices.data(), ni * sizeof(uint32_t), ni * sizeof(uint32_t));
+}
+
+// Writes an instanced shape's arrays as addInstanced lays them out: its mesh, then per copy
+// translation, rotation, scale, node id and (with `wind`) the wind data.
+void writeInstances(const InstancedShape& s, AtomicFileWriter& out, uint64_t& at, std::vector<uint8_t>& scratch,
+                    const std::vector<WindVertexNode>* wind) {
+  writePart(s.shape, out, at, scratch);
+  const size_t n = s.instances();
+  auto view = [&](CopyJob job, size_t bytes) {
+    out.write(kZeros, align4(at) - at);
+    at = align4(at);
+    job.offset = at;
+    writeJob(job, out, scratch);
+    at += bytes;
+  };
+  view({CopyJob::Kind::Bytes, s.translation.data(), n * sizeof(Vec3)}, n * sizeof(Vec3));
+  view({CopyJob::Kind::Bytes, s.rotation.data(), n * sizeof(Vec4)}, n * sizeof(Vec4));
+  view({CopyJob::Kind::Bytes, s.scale.data(), n * sizeof(Vec3)}, n * sizeof(Vec3));
+  if (s.nodeIds.empty()) return;
+  view({CopyJob::Kind::NodeId, s.nodeIds.data(), n}, n * sizeof(float));
+  if (wind)
+    for (CopyJob::Kind kind : {CopyJob::Kind::WindColor, CopyJob::Kind::WindPivot, CopyJob::Kind::WindAxis})
+      view({kind, s.nodeIds.data(), n, 0, wind->data(), wind->size(), false}, n * windBytes(kind));
 }
 
 // Whether `m`, one of `pm`'s part meshes, is a leaf part.
@@ -610,14 +740,20 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
       if (e) std::rethrow_exception(e);
   }
   if (scene.plants.empty()) return writeGlb(buildExportModel(scene, options), path, &scene.wind);
+  // An impostor is baked from the whole LOD0 of its plant: from one model, not streamed.
+  if (options.impostor.enabled) return writeGlb(buildExportModel(scene, options), path, &scene.wind);
+  // Normal maps need each part's tangents, computed from the whole part: from one model too.
+  if (options.maps) return writeGlb(buildExportModel(scene, options), path, &scene.wind);
 
-  const size_t reserve = jsonAllowance(scene, size_t(options.lods.levels), options.leafAtlas);
+  const size_t reserve =
+      jsonAllowance(scene, size_t(options.lods.levels), options.leafAtlas, options.instancing, options.maps);
   std::optional<AtomicFileWriter> out(std::in_place, path);
   out->write(std::string(20 + reserve + 8, ' '));  // header, JSON chunk, BIN chunk header: written last
   // Textures load while the plants are meshed and written.
   TexturePreload textures;
   std::vector<PlantParts> parts(scene.plants.size());
   std::vector<PartGeometry> written;  // every plant part's, in file order
+  std::vector<std::vector<InstanceGeometry>> writtenInstances(scene.plants.size());  // per plant, its instanced shapes'
   std::vector<std::string> warnings;  // levels of detail over their budget, in plant order
   uint64_t at = 0;                    // bytes of the binary chunk so far
   std::vector<uint8_t> scratch(kScratchBytes);
@@ -634,6 +770,7 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
     std::vector<mesh::PlantMesh> slots(tokens);
     std::vector<std::vector<mesh::LodLevel>> slotLods(tokens);  // the plant's lower levels of detail
     std::vector<std::vector<PartGeometry>> slotGeometry(tokens);
+    std::vector<PlantInstancing> slotInstancing(tokens);  // the plant's instanced primitives
     size_t next = 0;
     // At most `tokens` plants are in flight, and consecutive ones (the first and last stages
     // keep plant order): plant i owns slot i % tokens.
@@ -652,9 +789,19 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
         applyLeafAtlas(atlases, atlases.plants[i], pm);
         for (mesh::LodLevel& level : lods) applyLeafAtlas(atlases, atlases.plants[i], level.mesh);
       }
+      // Instancing: the parts are those of the plant's whole meshes; the .glb bakes each
+      // instanced group's rest, swapped in for its mesh (an empty one is not written).
+      PlantInstancing& inst = slotInstancing[i % tokens];
+      inst = plantInstancing(scene, i, options, pm);
+      parts[i] = plantParts(pm, lods);
+      addInstancing(parts[i], inst);
+      for (size_t k = 0; k < inst.instanced.size() && k < pm.primitives.size(); ++k)
+        if (inst.instanced[k]) std::swap(pm.primitives[k].mesh, inst.rest[k]);
       std::vector<PartGeometry>& g = slotGeometry[i % tokens];
       g.clear();
       const bool wind = windTableOf(&scene.wind, i) != nullptr;
+      writtenInstances[i].clear();
+      for (const InstancedShape& shape : inst.shapes) writtenInstances[i].push_back(instanceGeometryOf(shape, wind));
       forPlantParts(pm, [&](const TriangleMesh& m) { g.push_back(geometryOf(m, wind)); });
       for (const mesh::LodLevel& level : lods)
         forPlantParts(level.mesh, [&](const TriangleMesh& m) { g.push_back(geometryOf(m, wind)); });
@@ -663,13 +810,13 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
     auto writePlant = [&](size_t i) {
       const mesh::PlantMesh& pm = slots[i % tokens];
       const std::vector<mesh::LodLevel>& lods = slotLods[i % tokens];
-      parts[i] = plantParts(pm, lods);
       for (std::string& w : lodBudgetWarnings(scene.plants[i], i, lods)) warnings.push_back(std::move(w));
       const std::vector<WindVertexNode>* wind = windTableOf(&scene.wind, i);
       forPlantParts(pm, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch, wind, isLeafPart(pm, m)); });
       for (const mesh::LodLevel& level : lods)
         forPlantParts(level.mesh,
                       [&](const TriangleMesh& m) { writePart(m, *out, at, scratch, wind, isLeafPart(level.mesh, m)); });
+      for (const InstancedShape& shape : slotInstancing[i % tokens].shapes) writeInstances(shape, *out, at, scratch, wind);
       written.insert(written.end(), slotGeometry[i % tokens].begin(), slotGeometry[i % tokens].end());
     };
     tbb::parallel_pipeline(tokens, tbb::make_filter<void, size_t>(tbb::filter_mode::serial_in_order, input) &
@@ -682,7 +829,7 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
   loading.wait();
   for (const std::string& w : warnings) log::warn("{}", w);
 
-  ExportModel model = assembleExportModel(scene, parts, textures, options.leafAtlas ? &atlases : nullptr);
+  ExportModel model = assembleExportModel(scene, parts, textures, options.leafAtlas ? &atlases : nullptr, options.maps);
   for (size_t o = scene.plants.size(); o < model.objects.size(); ++o)
     for (const ExportPart& part : model.objects[o].parts) writePart(*part.mesh, *out, at, scratch);
   for (const ExportImage& img : model.images) {
@@ -703,7 +850,8 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
         if (o < scene.plants.size()) return written[plantPart++];
         return geometryOf(*part.mesh);
       },
-      imageSizes(model), builder, gltf, nullptr, &scene.wind);
+      [&](size_t o, size_t k) { return writtenInstances[o].at(k); }, imageSizes(model), builder, gltf, nullptr,
+      &scene.wind);
   const size_t binBytes = builder.size();
   if (plantPart != written.size() || binBytes != at)
     throw Error(path.string(), "", "cannot write .glb: the streamed parts do not match the model (internal error)");

@@ -3,12 +3,13 @@
 #include "tendril/core/error.h"
 #include "tendril/core/parallel.h"
 #include "tendril/io/export_model.h"
+#include "tendril/io/rect_pack.h"
 #include "tendril/mesh/leaf_mesh.h"
 
 #include <fmt/format.h>
-#include <stb/stb_rect_pack.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -29,56 +30,20 @@ std::string textureLabel(const std::string& spec) {
   return std::filesystem::path(spec).stem().string();
 }
 
-// Places the cells of `rects` (sizes given) with the least atlas area: every width from the
-// widest cell (or the square root of the total area) up to all cells in a row is tried with
-// an unbounded height. Deterministic.
+// Places the cells of `rects` with the least atlas area (io/rect_pack.h).
 void pack(LeafAtlas& atlas, const std::string& plantName) {
-  const size_t n = atlas.rects.size();
-  int sumW = 0, maxW = 0, sumH = 0;
-  uint64_t area = 0;
-  for (const LeafAtlasRect& r : atlas.rects) {
-    const int w = cellSize(r.width), h = cellSize(r.height);
-    sumW += w;
-    sumH += h;
-    maxW = std::max(maxW, w);
-    area += uint64_t(w) * uint64_t(h);
-  }
-  const int start = std::max(maxW, roundUp4(int(std::ceil(std::sqrt(double(area))))));
-  const int end = std::max(start, sumW);
-  const int step = std::max(4, roundUp4((end - start) / 256));
-  std::vector<stbrp_rect> best, cells(n);
-  int bestW = 0, bestH = 0;
-  std::vector<stbrp_node> nodes;
-  for (int W = start; W <= end; W += step) {
-    for (size_t i = 0; i < n; ++i) {
-      cells[i] = {};
-      cells[i].id = int(i);
-      cells[i].w = cellSize(atlas.rects[i].width);
-      cells[i].h = cellSize(atlas.rects[i].height);
-    }
-    nodes.resize(size_t(W));
-    stbrp_context context;
-    stbrp_init_target(&context, W, sumH, nodes.data(), W);
-    if (!stbrp_pack_rects(&context, cells.data(), int(n))) continue;  // cannot happen: sumH always fits
-    int H = 0;
-    for (const stbrp_rect& c : cells) H = std::max(H, int(c.y + c.h));
-    const uint64_t cost = uint64_t(W) * uint64_t(H);
-    if (best.empty() || cost < uint64_t(bestW) * uint64_t(bestH) ||
-        (cost == uint64_t(bestW) * uint64_t(bestH) && std::max(W, H) < std::max(bestW, bestH))) {
-      best = cells;
-      bestW = W;
-      bestH = H;
-    }
-  }
-  if (best.empty() || bestW > kMaxAtlasSize || bestH > kMaxAtlasSize)
+  std::vector<std::array<int, 2>> sizes;
+  for (const LeafAtlasRect& r : atlas.rects) sizes.push_back({cellSize(r.width), cellSize(r.height)});
+  const PackedRects packed = packRects(sizes, PackGoal::SmallestArea, 256, 4);
+  if (packed.corners.empty() || packed.width > kMaxAtlasSize || packed.height > kMaxAtlasSize)
     throw Error(plantName, "leaf atlas",
                 fmt::format("the leaf textures do not fit in a {0} x {0} atlas (they need {1} x {2} pixels)",
-                            kMaxAtlasSize, bestW, bestH));
-  atlas.width = bestW;
-  atlas.height = bestH;
-  for (const stbrp_rect& c : best) {
-    atlas.rects[size_t(c.id)].x = int(c.x) + kLeafAtlasGutter;
-    atlas.rects[size_t(c.id)].y = int(c.y) + kLeafAtlasGutter;
+                            kMaxAtlasSize, packed.width, packed.height));
+  atlas.width = packed.width;
+  atlas.height = packed.height;
+  for (size_t i = 0; i < atlas.rects.size(); ++i) {
+    atlas.rects[i].x = packed.corners[i][0] + kLeafAtlasGutter;
+    atlas.rects[i].y = packed.corners[i][1] + kLeafAtlasGutter;
   }
 }
 

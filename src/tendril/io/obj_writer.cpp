@@ -131,7 +131,7 @@ void writeObj(const ExportModel& model, const std::filesystem::path& path) {
 
   // File names of the images, by the role of the first material using them.
   std::vector<std::string> imageFile(model.images.size());
-  int barkCount = 0, leafCount = 0, otherCount = 0;
+  int barkCount = 0, leafCount = 0, otherCount = 0, impostorCount = 0;
   for (const ExportMaterial& m : model.materials) {
     if (m.texture < 0) continue;
     int image = model.textures[m.texture].image;
@@ -147,8 +147,27 @@ void writeObj(const ExportModel& model, const std::filesystem::path& path) {
       case ExportMaterial::Kind::Plain:
         role = fmt::format("tex{}", otherCount++);
         break;
+      case ExportMaterial::Kind::Impostor:
+        role = fmt::format("impostor{}", impostorCount++);
+        break;
     }
     imageFile[image] = safeName(stem) + "_" + role + extensionFor(model.images[image].image.mimeType);
+  }
+  // Impostors' normal maps: <stem>_impostor<k>_normal.png.
+  for (const ExportMaterial& m : model.materials) {
+    if (m.normalTexture < 0 || m.texture < 0) continue;
+    const int image = model.textures[m.normalTexture].image;
+    if (!imageFile[image].empty()) continue;
+    const std::string& colour = imageFile[model.textures[m.texture].image];
+    imageFile[image] = colour.substr(0, colour.rfind('.')) + "_normal.png";
+  }
+  // Bark roughness maps (output.maps): <stem>_bark_roughness.png.
+  for (const ExportMaterial& m : model.materials) {
+    if (m.roughnessTexture < 0 || m.texture < 0) continue;
+    const int image = model.textures[m.roughnessTexture].image;
+    if (!imageFile[image].empty()) continue;
+    const std::string& colour = imageFile[model.textures[m.texture].image];
+    imageFile[image] = colour.substr(0, colour.rfind('.')) + "_roughness.png";
   }
   for (size_t i = 0; i < model.images.size(); ++i)
     if (!imageFile[i].empty()) writeFileAtomic(dir / imageFile[i], model.images[i].image.bytes);
@@ -169,6 +188,11 @@ void writeObj(const ExportModel& model, const std::filesystem::path& path) {
       mtl += fmt::format("map_Kd {}\n", file);
       if (m.alphaMask) mtl += fmt::format("map_d {}\n", file);
     }
+    // A tangent-space normal map (the impostor's; glTF's convention, docs/export.md).
+    if (m.normalTexture >= 0) mtl += fmt::format("norm {}\n", imageFile[model.textures[m.normalTexture].image]);
+    // Roughness in G (glTF's layout); map_Pr readers take one channel: -imfchan g.
+    if (m.roughnessTexture >= 0)
+      mtl += fmt::format("map_Pr -imfchan g {}\n", imageFile[model.textures[m.roughnessTexture].image]);
   }
   writeFileAtomic(dir / mtlName, mtl);
 

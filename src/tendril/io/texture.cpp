@@ -372,6 +372,14 @@ void drawBark(Image& img) {
   }, 8);
 }
 
+// The same terms drawBark colours with.
+float barkRelief(float u, float v, uint64_t seed) {
+  const float streak = fbm(u, v, 10, 2, 4, seed);
+  const float ridge = 1.0f - std::abs(2.0f * streak - 1.0f);
+  const float fibre = fbm(u, v, 64, 4, 2, seed + 23);
+  return 0.85f * smoothstep(0.08f, 0.32f, ridge) * (0.7f + 0.3f * smoothstep(0.35f, 0.9f, ridge)) + 0.15f * fibre;
+}
+
 std::string knownNames() {
   std::string s;
   for (std::string_view n : kBuiltinNames) s += fmt::format("{}builtin:{}", s.empty() ? "" : ", ", n);
@@ -383,6 +391,8 @@ std::string_view builtinName(std::string_view spec) { return spec.substr(kBuilti
 }  // namespace
 
 std::span<const std::string_view> builtinTextureNames() { return kBuiltinNames; }
+
+float builtinBarkHeight(float u, float v) { return barkRelief(u, v, purposeId("texture.bark")); }
 
 bool isBuiltinTexture(std::string_view spec) { return spec.substr(0, kBuiltinPrefix.size()) == kBuiltinPrefix; }
 

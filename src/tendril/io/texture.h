@@ -33,6 +33,12 @@ bool isBuiltinTexture(std::string_view spec);
 // the known ones.
 Image generateBuiltinTexture(std::string_view name, int size = kBuiltinTextureSize);
 
+// The relief of builtin:bark at texture coordinates (u, v) in [0, 1)² (u across the image, v
+// down it, as the generator samples them; tiles with period 1), in [0, 1]: 0 in the dark
+// furrows, high on the light plates, with the same noise terms that colour it, so that a normal
+// map made from it (io/material_maps.h) matches the colour.
+float builtinBarkHeight(float u, float v);
+
 // Resolves a texture spec to pixels: "builtin:<name>" or an image file (PNG/JPEG/... via stb;
 // unreadable or corrupt → Error(path, "", "cannot read image: ...")).
 Image loadTexture(const std::string& spec);

@@ -34,6 +34,16 @@ struct OutputSettings {
   bool windData = false;
   // All of a plant's leaf textures packed into one atlas, its leaves one material (io/leaf_atlas.h).
   bool leafAtlas = false;
+  // A slab billboard impostor as each plant's last level of detail (io/impostor.h):
+  // `"impostor": true` or an object with "slabs" and "resolution".
+  bool impostor = false;
+  int impostorSlabs = 8;
+  int impostorResolution = 256;
+  // A graph plant's repeated primitive shapes written once each and drawn by GPU instancing
+  // (EXT_mesh_gpu_instancing) in the .glb where that makes it smaller (io/instancing.h).
+  bool instancing = false;
+  // Bark normal and roughness maps and leaf normal maps made with their textures (io/material_maps.h).
+  bool maps = false;
 };
 
 struct Scene {

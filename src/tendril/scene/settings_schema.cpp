@@ -121,6 +121,11 @@ const s::Schema<OutputSettings>& outputSchema() {
                                      "pack each plant's leaf textures into one atlas: its leaves are one material"),
           s::boolean<OutputSettings>("wind_data", &OutputSettings::windData, false, "engine wind data",
                                      "per-vertex wind attributes in the .glb for a game engine's shader"),
+          s::boolean<OutputSettings>("instancing", &OutputSettings::instancing, false, "GPU instancing",
+                                     "repeated primitive shapes written once, drawn per copy by "
+                                     "EXT_mesh_gpu_instancing in the .glb, where that makes it smaller"),
+          s::boolean<OutputSettings>("maps", &OutputSettings::maps, false, "normal and roughness maps",
+                                     "bark normal and roughness maps and leaf normal maps made with their textures"),
       }};
   return schema;
 }
@@ -196,6 +201,21 @@ OutputSettings readOutput(JsonObject& o) {
         throw Error(o.source(), at,
                     fmt::format("must not exceed the budget of the level above ({}), got {}", out.lodTriangles[i - 1],
                                 out.lodTriangles[i]));
+    }
+  }
+  // The impostor: true / false, or an object (io/impostor.h's settings).
+  if (const Json* imp = o.find("impostor")) {
+    if (imp->is_boolean()) {
+      out.impostor = imp->get<bool>();
+    } else if (imp->is_object()) {
+      JsonObject i(*imp, o.source(), o.pointerTo("impostor"));
+      out.impostor = i.boolean("enabled", true);
+      out.impostorSlabs = int(i.integer("slabs", 8, 1, 16));
+      out.impostorResolution = int(i.integer("resolution", 256, 16, 2048));
+      i.finish();
+    } else {
+      throw o.error("impostor", "expected true, false or an object with \"slabs\" and \"resolution\", got " +
+                                    describeJson(*imp));
     }
   }
   if (auto a = o.optionalObject("wind_animation")) {

@@ -18,6 +18,11 @@ io::ExportOptions exportOptions(const scene::OutputSettings& output) {
   options.lods.ratio = output.lodRatio;
   options.lods.triangles = output.lodTriangles;
   options.leafAtlas = output.leafAtlas;
+  options.impostor.enabled = output.impostor;
+  options.impostor.slabs = output.impostorSlabs;
+  options.impostor.resolution = output.impostorResolution;
+  options.instancing = output.instancing;
+  options.maps = output.maps;
   return options;
 }
 
