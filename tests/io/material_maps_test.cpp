@@ -15,12 +15,14 @@
 #include "tendril/scene/scene.h"
 #include "tendril/session/plant_export.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <tiny_gltf.h>
 
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <utility>
 
 namespace tendril::io {
 namespace {
@@ -103,17 +105,19 @@ TEST(MaterialMaps, LeafNormalsAndRoughness) {
 }
 
 // In the files: bark with normalTexture and metallicRoughnessTexture, leaves with normalTexture
-// (also an atlas's, with its rectangles), validator clean; .obj with norm and map_Pr.
+// (also an atlas's, with its rectangles), validator clean — also with levels of detail, whose
+// normal-mapped parts carry their own tangents; .obj with norm and map_Pr.
 TEST(MaterialMaps, FilesCarryTheMaps) {
   const fs::path dir = meshtest::exportTestDir();
   ExportScene scene;
   scene.plants.push_back(meshtest::syntheticIvy(400));
-  for (bool atlas : {false, true}) {
-    SCOPED_TRACE(atlas ? "atlas" : "no atlas");
+  for (const auto& [atlas, levels] : {std::pair{false, 1}, std::pair{true, 1}, std::pair{false, 3}, std::pair{true, 3}}) {
+    SCOPED_TRACE(fmt::format("{}, {} levels", atlas ? "atlas" : "no atlas", levels));
     ExportOptions o;
     o.maps = true;
     o.leafAtlas = atlas;
-    const fs::path file = dir / (atlas ? "atlas.glb" : "maps.glb");
+    o.lods.levels = levels;
+    const fs::path file = dir / fmt::format("{}-{}.glb", atlas ? "atlas" : "maps", levels);
     writeGlb(scene, file, o);
     writeGlb(buildExportModel(scene, o), dir / "whole.glb");
     const std::vector<uint8_t> s = readFileBytes(file), w = readFileBytes(dir / "whole.glb");
@@ -146,10 +150,17 @@ TEST(MaterialMaps, FilesCarryTheMaps) {
       EXPECT_EQ(m.images.at(size_t(colour)).width, m.images.at(size_t(normal)).width);
       EXPECT_EQ(m.images.at(size_t(colour)).height, m.images.at(size_t(normal)).height);
     }
-    // Normal-mapped primitives carry their tangent space (unit xyz, w ±1: the validator checks).
+    // Normal-mapped primitives, on every level, carry their tangent space (unit xyz, w ±1: the
+    // validator checks), as many as the primitive has vertices.
+    EXPECT_EQ(m.meshes.size(), size_t(levels));
     for (const tinygltf::Mesh& mesh : m.meshes)
-      for (const tinygltf::Primitive& p : mesh.primitives)
-        EXPECT_EQ(p.attributes.count("TANGENT"), m.materials.at(size_t(p.material)).normalTexture.index >= 0 ? 1u : 0u);
+      for (const tinygltf::Primitive& p : mesh.primitives) {
+        const bool mapped = m.materials.at(size_t(p.material)).normalTexture.index >= 0;
+        ASSERT_EQ(p.attributes.count("TANGENT"), mapped ? 1u : 0u) << mesh.name;
+        if (mapped)
+          EXPECT_EQ(m.accessors.at(size_t(p.attributes.at("TANGENT"))).count,
+                    m.accessors.at(size_t(p.attributes.at("POSITION"))).count) << mesh.name;
+      }
     EXPECT_EQ(barkMaps, 1u);
     EXPECT_EQ(leafMaps, atlas ? 1u : 3u);
   }

@@ -429,7 +429,9 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
       if (part.instancing == 1) part.rest = &model.plantInstancing[i].rest[part.index];
     }
     for (size_t k = 0; k < object.instanced.size(); ++k) object.instanced[k].shape = &model.plantInstancing[i].shapes[k];
-    // Normal-mapped parts carry their tangents (glTF TANGENT; the validator warns about
+    for (size_t k = 0; k < object.lods.size(); ++k)
+      for (ExportPart& part : object.lods[k]) part.mesh = meshOf(model.plantLods[i][k].mesh, part);
+    // Normal-mapped parts, on every level, carry their tangents (glTF TANGENT; the validator warns about
     // tangent spaces left to the reader, which need not agree between readers).
     if (options.maps)
       for (size_t level = 0; level < object.levels(); ++level)
@@ -439,8 +441,6 @@ ExportModel buildExportModel(const ExportScene& scene, const ExportOptions& opti
           model.mapTangents.push_back(std::make_unique<std::vector<Vec4>>(computeTangents(*part.mesh)));
           part.tangents = model.mapTangents.back().get();
         }
-    for (size_t k = 0; k < object.lods.size(); ++k)
-      for (ExportPart& part : object.lods[k]) part.mesh = meshOf(model.plantLods[i][k].mesh, part);
   }
   addImpostors(scene, options, model);
   return model;
