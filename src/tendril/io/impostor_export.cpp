@@ -47,6 +47,7 @@ void addImpostors(const ExportScene& scene, const ExportOptions& options, Export
       s.texture = imageOf(m.texture);
       s.repeat = m.texture >= 0 && model.textures[size_t(m.texture)].repeat;
       s.alphaMask = m.alphaMask;
+      s.primitive = part.source == PartSource::Primitive;
       surfaces.push_back(s);
     }
     Impostor& impostor = model.impostors[i];

@@ -32,8 +32,8 @@ void main() {
 )glsl";
 
 // Base colour (linear factor times the sRGB texture, written sRGB-encoded) and the normal facing
-// the viewer in the view's frame; alpha-tested leaves are cut out at 0.5, and drawn only into
-// the families they face.
+// the viewer in the view's frame, its alpha marking leaves (1) and other surfaces (128 / 255);
+// alpha-tested leaves are cut out at 0.5, and drawn only into the families they face.
 const char* const kFragment = R"glsl(
 in vec3 vNormal;
 in vec2 vUv;
@@ -44,6 +44,7 @@ uniform bool uAlphaMask;
 uniform sampler2D uTexture;
 uniform vec3 uRight, uUp, uFacing;
 uniform float uLeafShare;
+uniform bool uFamily;
 layout(location = 0) out vec4 oColor;
 layout(location = 1) out vec4 oNormal;
 vec3 toLinear(vec3 c) { return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), step(0.04045, c)); }
@@ -60,10 +61,10 @@ void main() {
   // Leaves go to the families their blade faces (io/impostor.h): by the face's own normal.
   vec3 f = normalize(cross(dFdx(vWorld), dFdy(vWorld)));
   vec3 a = abs(f);
-  if (uAlphaMask && abs(dot(f, uFacing)) < uLeafShare * max(a.x, max(a.y, a.z))) discard;
+  if (uFamily && uAlphaMask && abs(dot(f, uFacing)) < uLeafShare * max(a.x, max(a.y, a.z))) discard;
   if (dot(n, uFacing) < 0.0) n = -n;  // double-sided: the side the viewer sees
   oColor = vec4(toSrgb(clamp(c.rgb, 0.0, 1.0)), 1.0);
-  oNormal = vec4(vec3(dot(n, uRight), dot(n, uUp), dot(n, uFacing)) * 0.5 + 0.5, 1.0);
+  oNormal = vec4(vec3(dot(n, uRight), dot(n, uUp), dot(n, uFacing)) * 0.5 + 0.5, uAlphaMask ? 1.0 : 128.0 / 255.0);
 }
 )glsl";
 
@@ -110,6 +111,7 @@ std::vector<io::ImpostorImages> bakeHere(const std::vector<io::ImpostorSurface>&
   const GLint uRight = glGetUniformLocation(program.get(), "uRight");
   const GLint uUp = glGetUniformLocation(program.get(), "uUp");
   const GLint uFacing = glGetUniformLocation(program.get(), "uFacing");
+  const GLint uFamily = glGetUniformLocation(program.get(), "uFamily");
   glUniform1f(glGetUniformLocation(program.get(), "uLeafShare"), io::kImpostorLeafShare);
   glUniform1i(uTexture, 0);
 
@@ -197,11 +199,14 @@ std::vector<io::ImpostorImages> bakeHere(const std::vector<io::ImpostorSurface>&
     glUniform3f(uRight, right.x(), right.y(), right.z());
     glUniform3f(uUp, up.x(), up.y(), up.z());
     glUniform3f(uFacing, facing.x(), facing.y(), facing.z());
+    glUniform1i(uFamily, v.surface < 0);
     glActiveTexture(GL_TEXTURE0);
     for (size_t i = 0; i < surfaces.size(); ++i) {
       const SurfaceBuffers& b = buffers[i];
       if (b.count == 0) continue;
       const io::ImpostorSurface& s = surfaces[i];
+      // A family's slab shows the surfaces not on quads of their own; an own quad its surface.
+      if (v.surface < 0 ? !io::inFamily(s, v.normal) : int(i) != v.surface) continue;
       glUniform4f(uBase, s.baseColor.x(), s.baseColor.y(), s.baseColor.z(), s.baseColor.w());
       glUniform1i(uTextured, b.texture != 0);
       glUniform1i(uAlpha, s.alphaMask);
