@@ -16,6 +16,8 @@ find_package(Threads REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(MUPARSER REQUIRED IMPORTED_TARGET muparser)
 pkg_check_modules(STB REQUIRED IMPORTED_TARGET stb)
+# Pivot Painter textures (io/pivot_painter.h): RGBA half-float OpenEXR, which stb cannot write.
+pkg_check_modules(OPENEXR REQUIRED IMPORTED_TARGET OpenEXR)
 # Rendering: libepoxy loads the OpenGL entry points of whichever context is current (the
 # studio's GLFW window or an EGL offscreen context); EGL makes headless contexts.
 pkg_check_modules(EPOXY REQUIRED IMPORTED_TARGET epoxy)

@@ -70,12 +70,16 @@ int runModel(const ModelOptions& o) {
   session::Session session(std::move(sc));
   double generateSeconds = phase.seconds();
   phase.reset();
-  const io::ExportScene scene = session::exportScene(session, g->source);
+  io::ExportScene scene = session::exportScene(session, g->source);
   // Meshed once: the triangle count is reported, and both writers take the meshes.
   io::ExportModel model = io::buildExportModel(scene, session::exportOptions(session.scene().output));
   if (formats.count("glb")) {
-    io::writeGlb(model, file(".glb"), &scene.wind);
+    // Pivot Painter textures (output.pivot_painter) beside the .glb, whose TEXCOORD_1 indexes them.
+    std::vector<std::string> textures =
+        session::writePivotPainterFiles(session, scene, session.scene().output, outDir, out.stem().string(), g->source);
+    io::writeGlb(model, file(".glb"), &scene.wind, &scene.pivotPainter);
     written.push_back(file(".glb").string());
+    written.insert(written.end(), textures.begin(), textures.end());
   }
   if (formats.count("obj")) {
     io::writeObj(model, file(".obj"));

@@ -57,6 +57,10 @@ void addLodOptions(CLI::App& sub, LodOptions& options) {
   sub.add_flag("--maps", options.maps,
                "Bark normal and roughness maps and leaf normal maps, made with their textures (glTF normalTexture and "
                "metallicRoughnessTexture, .obj norm and map_Pr; sets the scene's output.maps)");
+  sub.add_flag("--pivot-painter", options.pivotPainter,
+               "Pivot Painter 2 textures beside the .glb, per plant: <stem>-<plant>-pp-pivot.exr (pivot, parent index) "
+               "and <stem>-<plant>-pp-xaxis.png (axis, extent), indexed by the .glb's TEXCOORD_1 (docs/export.md; "
+               "sets the scene's output.pivot_painter)");
 }
 
 void applyLodOptions(const LodOptions& options, scene::OutputSettings& output) {
@@ -65,6 +69,7 @@ void applyLodOptions(const LodOptions& options, scene::OutputSettings& output) {
   if (options.windData) output.windData = true;
   if (options.instancing) output.instancing = true;
   if (options.maps) output.maps = true;
+  if (options.pivotPainter) output.pivotPainter = true;
   if (options.lods > 0) {
     output.lods = options.lods;
     output.lodTriangles.clear();

@@ -34,6 +34,7 @@ struct LodOptions {
   bool impostor = false;  // --impostor: a billboard impostor as the last level (sets output.impostor)
   bool instancing = false;  // --instancing: GPU instancing of repeated primitives (sets output.instancing)
   bool maps = false;        // --maps: bark normal/roughness and leaf normal maps (sets output.maps)
+  bool pivotPainter = false;  // --pivot-painter: Pivot Painter 2 textures (sets output.pivot_painter)
 };
 void addLodOptions(CLI::App& sub, LodOptions& options);
 // Applies the options to `output`; --lod-ratio without levels of detail (from --lods or the

@@ -252,7 +252,9 @@ TEST(EngineWind, BothWritersSameBytesAtAnyThreadCountAndValid) {
   EXPECT_GE(leafParts, 3u);
   EXPECT_GE(barkParts, 3u);
   // Without wind tables nothing changes.
-  io::writeGlb(io::ExportScene{scene.plants, {}, {}}, dir / "plain.glb");
+  io::ExportScene plainScene;
+  plainScene.plants = scene.plants;
+  io::writeGlb(plainScene, dir / "plain.glb");
   const tinygltf::Model plain = load(dir / "plain.glb");
   for (const tinygltf::Primitive& prim : plain.meshes[0].primitives) EXPECT_EQ(prim.attributes.count("COLOR_0"), 0u);
 }

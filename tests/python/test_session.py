@@ -340,3 +340,31 @@ def test_a_plant_that_stops_early_says_why():
     healthy = tendril.Session(wall_scene(steps=60))
     healthy.run()
     assert healthy.growth_problems() == []
+
+
+
+def test_pivot_painter_textures_are_what_the_cli_writes(tmp_path):
+    """output.pivot_painter through Python's Session.export: the .glb and both textures per plant,
+    byte for byte what `tendril grow` writes for the same scene (docs/export.md)."""
+    scene = json.loads((SCENES / "default.json").read_text())
+    scene["steps"] = 40
+    scene.setdefault("output", {})["pivot_painter"] = True
+    scene_file = tmp_path / "scene.json"
+    scene_file.write_text(json.dumps(scene))
+    cli_out = tmp_path / "cli"
+    subprocess.run([CLI, "grow", str(scene_file), "-o", str(cli_out), "--format", "glb", "--quiet"], check=True)
+    s = tendril.Session.open(str(scene_file))
+    s.run()
+    py_out = tmp_path / "py"
+    py_out.mkdir()
+    s.export(str(py_out / "plant.glb"))
+    textures = sorted(p.name for p in cli_out.glob("plant-*-pp-*"))
+    assert len(textures) == 2 * s.plant_count
+    assert sorted(p.name for p in py_out.glob("plant-*-pp-*")) == textures
+    for name in textures + ["plant.glb"]:
+        assert sha(py_out / name) == sha(cli_out / name), name
+    # The .obj alone carries nothing of it, and writes no textures.
+    obj_out = tmp_path / "obj"
+    obj_out.mkdir()
+    s.export(str(obj_out / "plant.obj"))
+    assert not list(obj_out.glob("*-pp-*"))

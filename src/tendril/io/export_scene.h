@@ -4,6 +4,7 @@
 
 #include "tendril/core/triangle_mesh.h"
 #include "tendril/io/impostor.h"
+#include "tendril/io/pivot_painter.h"
 #include "tendril/io/wind_attributes.h"
 #include "tendril/mesh/lod.h"
 #include "tendril/mesh/mesh_options.h"
@@ -26,6 +27,10 @@ struct ExportScene {
   // Engine wind data per plant (wind::engineWindTables, docs/engine-wind.md): with a table for
   // plant i, the .glb gives its vertices COLOR_0, _WIND_PIVOT and _WIND_AXIS. Empty: none.
   WindTables wind;
+  // Pivot Painter textures per plant (io/pivot_painter.h; session::writePivotPainterFiles
+  // writes them): with a grid for plant i, the .glb gives its vertices TEXCOORD_1, the UV of
+  // their element's (their node's) pixel. Empty: none. Not with ExportOptions::instancing.
+  PivotPainterGrids pivotPainter;
 };
 
 struct ExportOptions {

@@ -31,19 +31,38 @@ static_assert(std::endian::native == std::endian::little, "the .glb writer assum
 
 // The content of one buffer view; views are written in offset order.
 struct CopyJob {
-  enum class Kind { Bytes, FlipUv, Index16, NodeId, WindColor, WindPivot, WindAxis };
+  enum class Kind { Bytes, FlipUv, Index16, NodeId, WindColor, WindPivot, WindAxis, PivotUv, Zeros };
   Kind kind = Kind::Bytes;
   const void* source = nullptr;
-  size_t count = 0;   // bytes (Bytes), uvs (FlipUv), indices (Index16) or node ids (NodeId, Wind*)
+  // bytes (Bytes, Zeros), uvs (FlipUv), indices (Index16) or node ids (NodeId, Wind*, PivotUv)
+  size_t count = 0;
   size_t offset = 0;  // in the buffer
   // Wind*: the plant's engine wind table (by node id) and whether the part is leaves.
   const WindVertexNode* wind = nullptr;
   size_t windNodes = 0;
   bool leaf = false;
+  // PivotUv: the plant's Pivot Painter textures (per node id its pixel's UV; io/pivot_painter.h).
+  PivotPainterGrid grid = {};
 };
 
 // Bytes per vertex of a wind view: COLOR_0 (float RGBA), _WIND_PIVOT and _WIND_AXIS (float VEC3).
 size_t windBytes(CopyJob::Kind kind) { return kind == CopyJob::Kind::WindColor ? 4 * sizeof(float) : sizeof(Vec3); }
+
+// The bytes a copy job writes.
+size_t jobBytes(const CopyJob& job) {
+  switch (job.kind) {
+    case CopyJob::Kind::FlipUv:
+    case CopyJob::Kind::PivotUv: return job.count * sizeof(Vec2);
+    case CopyJob::Kind::Index16: return job.count * sizeof(uint16_t);
+    case CopyJob::Kind::NodeId: return job.count * sizeof(float);
+    case CopyJob::Kind::WindColor:
+    case CopyJob::Kind::WindPivot:
+    case CopyJob::Kind::WindAxis: return job.count * windBytes(job.kind);
+    case CopyJob::Kind::Bytes:
+    case CopyJob::Kind::Zeros: return job.count;
+  }
+  return job.count;
+}
 
 // Node ids are written as floats (glTF forbids unsigned int for application-specific
 // attributes), exact integers below 2^24.
@@ -100,6 +119,28 @@ void writeJob(const CopyJob& job, AtomicFileWriter& out, std::vector<uint8_t>& s
           f[i] = static_cast<float>(id[b + i]);
         }
         out.write(scratch.data(), n * sizeof(float));
+      }
+      return;
+    }
+    case CopyJob::Kind::Zeros: {
+      std::fill(scratch.begin(), scratch.end(), uint8_t(0));
+      for (size_t b = 0; b < job.count; b += kScratchBytes) out.write(scratch.data(), std::min(kScratchBytes, job.count - b));
+      return;
+    }
+    case CopyJob::Kind::PivotUv: {
+      // Per vertex its element's (its node's) pixel centre (io/pivot_painter.h).
+      const uint32_t* id = static_cast<const uint32_t*>(job.source);
+      for (size_t b = 0; b < job.count; b += kBlock) {
+        size_t n = std::min(kBlock, job.count - b);
+        float* f = reinterpret_cast<float*>(scratch.data());
+        for (size_t i = 0; i < n; ++i) {
+          if (id[b + i] >= job.grid.elements)
+            throw Error(out.path().string(), "", fmt::format("cannot write .glb: node id {} has no Pivot Painter "
+                                                             "element (the plant has {} nodes)", id[b + i], job.grid.elements));
+          const Vec2 uv = pivotPainterUv(id[b + i], job.grid);
+          f[2 * i] = uv.x(), f[2 * i + 1] = uv.y();
+        }
+        out.write(scratch.data(), n * sizeof(Vec2));
       }
       return;
     }
@@ -186,12 +227,14 @@ struct PartGeometry {
   Bounds3 bounds;
   bool nodeIds = false;
   bool wind = false;  // engine wind data: COLOR_0, _WIND_PIVOT, _WIND_AXIS
+  bool pivot = false;  // Pivot Painter UVs: TEXCOORD_1 (and a TEXCOORD_0 of zeros where the part has no uvs)
 };
 
-// `wind`: the part's plant has a wind table (written where the part has node ids).
-PartGeometry geometryOf(const TriangleMesh& m, bool wind = false) {
+// `wind`: the part's plant has a wind table; `pivot`: Pivot Painter textures (each written
+// where the part has node ids).
+PartGeometry geometryOf(const TriangleMesh& m, bool wind = false, bool pivot = false) {
   return {m.positions.size(), m.indices.size(), !m.normals.empty(), !m.uvs.empty(), parallelBounds(m.positions),
-          !m.nodeIds.empty(), wind && !m.nodeIds.empty()};
+          !m.nodeIds.empty(), wind && !m.nodeIds.empty(), pivot && !m.nodeIds.empty()};
 }
 
 // A plant's wind table, or none.
@@ -199,15 +242,21 @@ const std::vector<WindVertexNode>* windTableOf(const WindTables* tables, size_t 
   return tables && object < tables->size() && !(*tables)[object].empty() ? &(*tables)[object] : nullptr;
 }
 
+// A plant's Pivot Painter texture grid, or none.
+const PivotPainterGrid* pivotGridOf(const PivotPainterGrids* grids, size_t object) {
+  return grids && object < grids->size() && (*grids)[object].width > 0 ? &(*grids)[object] : nullptr;
+}
+
 // uint16 indices when they fit; 65535 itself is the primitive-restart value and not allowed.
 bool smallIndices(size_t vertices) { return vertices < 65536; }
 
 // The part's views and accessors, in the order its bytes are written: positions, normals,
-// uvs, node ids, wind data (COLOR_0, _WIND_PIVOT, _WIND_AXIS), indices. With `mesh`, the copy
-// jobs that write them (the wind data from `wind`, the plant's table).
+// uvs, node ids, wind data (COLOR_0, _WIND_PIVOT, _WIND_AXIS), Pivot Painter UVs (TEXCOORD_0
+// of zeros where the part has no uvs, TEXCOORD_1), indices. With `mesh`, the copy jobs that
+// write them (the wind data from `wind`, the plant's table; the UVs from `pivot`, its grid).
 tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBuilder& b, tinygltf::Model& gltf,
                             const TriangleMesh* mesh, std::vector<CopyJob>* jobs,
-                            const std::vector<WindVertexNode>* wind = nullptr) {
+                            const std::vector<WindVertexNode>* wind = nullptr, const PivotPainterGrid* pivot = nullptr) {
   const size_t n = g.vertices;
   tinygltf::Primitive prim;
   prim.mode = TINYGLTF_MODE_TRIANGLES;
@@ -252,6 +301,21 @@ tinygltf::Primitive addPart(const ExportPart& part, const PartGeometry& g, GlbBu
         jobs->push_back({kind, mesh->nodeIds.data(), n, b.offsetOf(wv), wind->data(), wind->size(),
                          part.source == PartSource::Leaves});
       }
+    }
+  }
+  if (g.pivot) {
+    if (!g.uvs) {  // TEXCOORD_1 needs a TEXCOORD_0 (glTF's sets are numbered from 0 without gaps)
+      int zv = b.view(n * sizeof(Vec2), kArrayBuffer);
+      prim.attributes["TEXCOORD_0"] = b.accessor(zv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, n);
+      if (mesh) jobs->push_back({CopyJob::Kind::Zeros, nullptr, n * sizeof(Vec2), b.offsetOf(zv)});
+    }
+    int pv = b.view(n * sizeof(Vec2), kArrayBuffer);
+    prim.attributes["TEXCOORD_1"] = b.accessor(pv, TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, n);
+    if (mesh) {
+      if (!pivot) throw Error("", "", "cannot write .glb: a part with Pivot Painter UVs has no grid (internal error)");
+      CopyJob job{CopyJob::Kind::PivotUv, mesh->nodeIds.data(), n, b.offsetOf(pv)};
+      job.grid = *pivot;
+      jobs->push_back(job);
     }
   }
   const bool small = smallIndices(n);
@@ -400,7 +464,7 @@ namespace {
 template <class Geometry, class InstGeometry>
 void describe(const ExportModel& model, Geometry&& geometry, InstGeometry&& instanceGeometry,
               const std::vector<size_t>& imageBytes, GlbBuilder& builder, tinygltf::Model& gltf,
-              std::vector<CopyJob>* jobs, const WindTables* wind) {
+              std::vector<CopyJob>* jobs, const WindTables* wind, const PivotPainterGrids* pivot) {
   gltf.asset.version = "2.0";
   gltf.asset.generator = "Tendril " TENDRIL_VERSION;
   tinygltf::Scene scene;
@@ -418,7 +482,7 @@ void describe(const ExportModel& model, Geometry&& geometry, InstGeometry&& inst
       for (const ExportPart& part : object.partsOf(level))
         if (part.instancing != 2)  // a primitive group all of whose copies are instances has no baked part
           mesh.primitives.push_back(addPart(part, geometry(o, part), builder, gltf, jobs ? bakedMesh(part) : nullptr,
-                                            jobs, windTableOf(wind, o)));
+                                            jobs, windTableOf(wind, o), pivotGridOf(pivot, o)));
       if (!mesh.primitives.empty()) {
         gltf.meshes.push_back(std::move(mesh));
         node.mesh = static_cast<int>(gltf.meshes.size() - 1);
@@ -517,17 +581,25 @@ const uint8_t kZeros[4] = {0, 0, 0, 0};
 
 }  // namespace
 
-void writeGlb(const ExportModel& model, const std::filesystem::path& path, const WindTables* wind) {
+void writeGlb(const ExportModel& model, const std::filesystem::path& path, const WindTables* wind,
+              const PivotPainterGrids* pivot) {
+  for (size_t o = 0; o < model.objects.size(); ++o)
+    if (pivotGridOf(pivot, o) && !model.objects[o].instanced.empty())
+      throw Error(path.string(), "output.pivot_painter",
+                  "Pivot Painter textures cannot go with GPU instancing (an instanced copy has no vertices to carry "
+                  "its element's UV): turn output.instancing off");
   tinygltf::Model gltf;
   GlbBuilder builder(gltf);
   std::vector<CopyJob> jobs;
   describe(
       model,
-      [&](size_t o, const ExportPart& part) { return geometryOf(*bakedMesh(part), windTableOf(wind, o) != nullptr); },
+      [&](size_t o, const ExportPart& part) {
+        return geometryOf(*bakedMesh(part), windTableOf(wind, o) != nullptr, pivotGridOf(pivot, o) != nullptr);
+      },
       [&](size_t o, size_t k) {
         return instanceGeometryOf(*model.objects[o].instanced[k].shape, windTableOf(wind, o) != nullptr);
       },
-      imageSizes(model), builder, gltf, &jobs, wind);
+      imageSizes(model), builder, gltf, &jobs, wind, pivot);
   // Every view is streamed from the meshes into the file, so that the geometry is never copied
   // into a second in-memory buffer (hundreds of MB for a large plant).
   const size_t binBytes = builder.size();
@@ -545,13 +617,7 @@ void writeGlb(const ExportModel& model, const std::filesystem::path& path, const
     for (const CopyJob& job : jobs) {  // in offset order
       out.write(kZeros, job.offset - at);
       writeJob(job, out, scratch);
-      at = job.offset + (job.kind == CopyJob::Kind::FlipUv    ? job.count * sizeof(Vec2)
-                         : job.kind == CopyJob::Kind::Index16 ? job.count * sizeof(uint16_t)
-                         : job.kind == CopyJob::Kind::NodeId  ? job.count * sizeof(float)
-                         : job.kind == CopyJob::Kind::WindColor || job.kind == CopyJob::Kind::WindPivot ||
-                                 job.kind == CopyJob::Kind::WindAxis
-                             ? job.count * windBytes(job.kind)
-                             : job.count);
+      at = job.offset + jobBytes(job);
     }
     out.write(kZeros, binBytes - at);
   }
@@ -570,8 +636,9 @@ namespace {
 // LOD0's node lists the others (MSFT_lod: ten digits per id, 24 characters per coverage).
 size_t jsonAllowance(const ExportScene& scene, size_t levels, bool leafAtlas, bool instancing, bool maps = false) {
   constexpr size_t kPart = 1300, kMaterial = 400, kImage = 200, kObject = 80, kEscape = 6;
-  // Engine wind data: three more accessors and views per plant part (COLOR_0, _WIND_PIVOT, _WIND_AXIS).
-  const size_t windPart = scene.wind.empty() ? 0 : 800;
+  // Engine wind data: three more accessors and views per plant part (COLOR_0, _WIND_PIVOT,
+  // _WIND_AXIS); Pivot Painter UVs: two more (TEXCOORD_0 where the part has none, TEXCOORD_1).
+  const size_t windPart = (scene.wind.empty() ? 0 : 800) + (scene.pivotPainter.empty() ? 0 : 540);
   size_t bytes = 1024;  // asset, scene, buffer, separators
   std::vector<std::string> images, materials;
   auto image = [&](const std::string& spec) {
@@ -646,7 +713,8 @@ size_t jsonAllowance(const ExportScene& scene, size_t levels, bool leafAtlas, bo
 // 4-byte aligned as GlbBuilder lays them out; the wind data (where the part has node ids) from
 // the plant's table `wind`, `leaf` for a leaf part.
 void writePart(const TriangleMesh& m, AtomicFileWriter& out, uint64_t& at, std::vector<uint8_t>& scratch,
-               const std::vector<WindVertexNode>* wind = nullptr, bool leaf = false) {
+               const std::vector<WindVertexNode>* wind = nullptr, bool leaf = false,
+               const PivotPainterGrid* pivot = nullptr) {
   auto view = [&](CopyJob::Kind kind, const void* source, size_t count, size_t bytes) {
     out.write(kZeros, align4(at) - at);
     at = align4(at);
@@ -665,6 +733,15 @@ void writePart(const TriangleMesh& m, AtomicFileWriter& out, uint64_t& at, std::
       writeJob({kind, m.nodeIds.data(), n, at, wind->data(), wind->size(), leaf}, out, scratch);
       at += n * windBytes(kind);
     }
+  if (pivot && !m.nodeIds.empty()) {
+    if (m.uvs.empty()) view(CopyJob::Kind::Zeros, nullptr, n * sizeof(Vec2), n * sizeof(Vec2));
+    out.write(kZeros, align4(at) - at);
+    at = align4(at);
+    CopyJob job{CopyJob::Kind::PivotUv, m.nodeIds.data(), n, at};
+    job.grid = *pivot;
+    writeJob(job, out, scratch);
+    at += n * sizeof(Vec2);
+  }
   if (smallIndices(n))
     view(CopyJob::Kind::Index16, m.indices.data(), ni, ni * sizeof(uint16_t));
   else
@@ -726,6 +803,11 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
   // index, as when they were meshed in order.
   mesh::validateMeshOptions(options.mesh, "mesh options");
   mesh::validateLodSettings(options.lods, "export options");
+  if (options.instancing && std::any_of(scene.pivotPainter.begin(), scene.pivotPainter.end(),
+                                        [](const PivotPainterGrid& g) { return g.width > 0; }))
+    throw Error(path.string(), "output.pivot_painter",
+                "Pivot Painter textures cannot go with GPU instancing (an instanced copy has no vertices to carry "
+                "its element's UV): turn output.instancing off");
   {
     const size_t n = scene.plants.size();
     std::vector<std::exception_ptr> failed(n);
@@ -739,11 +821,11 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
     for (const std::exception_ptr& e : failed)
       if (e) std::rethrow_exception(e);
   }
-  if (scene.plants.empty()) return writeGlb(buildExportModel(scene, options), path, &scene.wind);
+  if (scene.plants.empty()) return writeGlb(buildExportModel(scene, options), path, &scene.wind, &scene.pivotPainter);
   // An impostor is baked from the whole LOD0 of its plant: from one model, not streamed.
-  if (options.impostor.enabled) return writeGlb(buildExportModel(scene, options), path, &scene.wind);
+  if (options.impostor.enabled) return writeGlb(buildExportModel(scene, options), path, &scene.wind, &scene.pivotPainter);
   // Normal maps need each part's tangents, computed from the whole part: from one model too.
-  if (options.maps) return writeGlb(buildExportModel(scene, options), path, &scene.wind);
+  if (options.maps) return writeGlb(buildExportModel(scene, options), path, &scene.wind, &scene.pivotPainter);
 
   const size_t reserve =
       jsonAllowance(scene, size_t(options.lods.levels), options.leafAtlas, options.instancing, options.maps);
@@ -800,11 +882,12 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
       std::vector<PartGeometry>& g = slotGeometry[i % tokens];
       g.clear();
       const bool wind = windTableOf(&scene.wind, i) != nullptr;
+      const bool pivot = pivotGridOf(&scene.pivotPainter, i) != nullptr;
       writtenInstances[i].clear();
       for (const InstancedShape& shape : inst.shapes) writtenInstances[i].push_back(instanceGeometryOf(shape, wind));
-      forPlantParts(pm, [&](const TriangleMesh& m) { g.push_back(geometryOf(m, wind)); });
+      forPlantParts(pm, [&](const TriangleMesh& m) { g.push_back(geometryOf(m, wind, pivot)); });
       for (const mesh::LodLevel& level : lods)
-        forPlantParts(level.mesh, [&](const TriangleMesh& m) { g.push_back(geometryOf(m, wind)); });
+        forPlantParts(level.mesh, [&](const TriangleMesh& m) { g.push_back(geometryOf(m, wind, pivot)); });
       return i;
     };
     auto writePlant = [&](size_t i) {
@@ -812,10 +895,12 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
       const std::vector<mesh::LodLevel>& lods = slotLods[i % tokens];
       for (std::string& w : lodBudgetWarnings(scene.plants[i], i, lods)) warnings.push_back(std::move(w));
       const std::vector<WindVertexNode>* wind = windTableOf(&scene.wind, i);
-      forPlantParts(pm, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch, wind, isLeafPart(pm, m)); });
+      const PivotPainterGrid* pivot = pivotGridOf(&scene.pivotPainter, i);
+      forPlantParts(pm, [&](const TriangleMesh& m) { writePart(m, *out, at, scratch, wind, isLeafPart(pm, m), pivot); });
       for (const mesh::LodLevel& level : lods)
-        forPlantParts(level.mesh,
-                      [&](const TriangleMesh& m) { writePart(m, *out, at, scratch, wind, isLeafPart(level.mesh, m)); });
+        forPlantParts(level.mesh, [&](const TriangleMesh& m) {
+          writePart(m, *out, at, scratch, wind, isLeafPart(level.mesh, m), pivot);
+        });
       for (const InstancedShape& shape : slotInstancing[i % tokens].shapes) writeInstances(shape, *out, at, scratch, wind);
       written.insert(written.end(), slotGeometry[i % tokens].begin(), slotGeometry[i % tokens].end());
     };
@@ -851,14 +936,14 @@ void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const
         return geometryOf(*part.mesh);
       },
       [&](size_t o, size_t k) { return writtenInstances[o].at(k); }, imageSizes(model), builder, gltf, nullptr,
-      &scene.wind);
+      &scene.wind, &scene.pivotPainter);
   const size_t binBytes = builder.size();
   if (plantPart != written.size() || binBytes != at)
     throw Error(path.string(), "", "cannot write .glb: the streamed parts do not match the model (internal error)");
   std::string content = glbJson(gltf, binBytes, path);
   if (content.size() > reserve || binBytes == 0) {
     out.reset();  // removes the temporary
-    return writeGlb(buildExportModel(scene, options), path, &scene.wind);
+    return writeGlb(buildExportModel(scene, options), path, &scene.wind, &scene.pivotPainter);
   }
   content.resize(reserve, ' ');
   const std::string header = glbHeader(reserve, binBytes, path);

@@ -11,6 +11,8 @@
 // int for application-specific attributes; docs/skeleton-format.md); with engine wind data
 // (ExportScene::wind, io/wind_attributes.h) also COLOR_0 (float RGBA: branch level, phase,
 // natural period, leaf flag), _WIND_PIVOT and _WIND_AXIS (float VEC3), docs/engine-wind.md;
+// with Pivot Painter textures (ExportScene::pivotPainter, io/pivot_painter.h) also TEXCOORD_1,
+// the UV of the vertex's element's pixel (and a TEXCOORD_0 of zeros on a part without uvs);
 // indices are uint16 when a part has fewer than 65536 vertices, else uint32.
 // Images are embedded as PNG/JPEG buffer views. Nothing unused is written, so the Khronos
 // validator reports no errors and no warnings. The bytes depend only on the input, not on the
@@ -39,7 +41,10 @@ namespace tendril::io {
 void appendMaterialsAndTextures(const ExportModel& model, tinygltf::Model& gltf);
 
 void writeGlb(const ExportScene& scene, const std::filesystem::path& path, const ExportOptions& options = {});
-// `wind`: per plant (object i for plant i) its engine wind table, as ExportScene::wind.
-void writeGlb(const ExportModel& model, const std::filesystem::path& path, const WindTables* wind = nullptr);
+// `wind`: per plant (object i for plant i) its engine wind table, as ExportScene::wind;
+// `pivot`: per plant its Pivot Painter grid, as ExportScene::pivotPainter (an Error for a plant
+// with instanced shapes).
+void writeGlb(const ExportModel& model, const std::filesystem::path& path, const WindTables* wind = nullptr,
+              const PivotPainterGrids* pivot = nullptr);
 
 }  // namespace tendril::io

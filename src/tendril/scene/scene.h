@@ -44,6 +44,8 @@ struct OutputSettings {
   bool instancing = false;
   // Bark normal and roughness maps and leaf normal maps made with their textures (io/material_maps.h).
   bool maps = false;
+  // Pivot Painter 2-style textures beside the .glb, per plant, and their UVs in it (io/pivot_painter.h).
+  bool pivotPainter = false;
 };
 
 struct Scene {

@@ -126,6 +126,9 @@ const s::Schema<OutputSettings>& outputSchema() {
                                      "EXT_mesh_gpu_instancing in the .glb, where that makes it smaller"),
           s::boolean<OutputSettings>("maps", &OutputSettings::maps, false, "normal and roughness maps",
                                      "bark normal and roughness maps and leaf normal maps made with their textures"),
+          s::boolean<OutputSettings>("pivot_painter", &OutputSettings::pivotPainter, false, "Pivot Painter textures",
+                                     "per plant a Pivot Painter 2 pair of textures (pivots and parents, axes and "
+                                     "extents) beside the .glb, indexed by its TEXCOORD_1"),
       }};
   return schema;
 }

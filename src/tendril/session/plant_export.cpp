@@ -1,8 +1,11 @@
 #include "tendril/session/plant_export.h"
 
+#include "tendril/core/error.h"
+#include "tendril/core/parallel.h"
 #include "tendril/io/export_model.h"
 #include "tendril/io/gltf_writer.h"
 #include "tendril/io/obj_writer.h"
+#include "tendril/io/pivot_painter.h"
 #include "tendril/io/skeleton_writer.h"
 #include "tendril/wind/engine_wind.h"
 
@@ -43,6 +46,51 @@ io::ExportScene exportScene(const Session& session, const std::string& source) {
   return out;
 }
 
+std::vector<std::string> writePivotPainterFiles(const Session& session, io::ExportScene& exported,
+                                                const scene::OutputSettings& output, const std::filesystem::path& outDir,
+                                                const std::string& stem, const std::string& source) {
+  exported.pivotPainter.clear();
+  if (!output.pivotPainter) return {};
+  if (output.instancing)
+    throw Error(source, "output.pivot_painter",
+                "Pivot Painter textures cannot go with GPU instancing (an instanced copy has no vertices to carry its "
+                "element's UV): turn output.instancing off");
+  const io::WindTables made = exported.wind.empty() ? wind::engineWindTables(exported.plants, session.growthFlow())
+                                                    : io::WindTables{};
+  const io::WindTables& tables = exported.wind.empty() ? made : exported.wind;
+  const size_t n = exported.plants.size();
+  std::vector<io::PivotPainterTextures> textures(n);
+  // Every plant checked (its node count) before any file is written; the first failure by index.
+  std::vector<std::exception_ptr> failed(n);
+  parallelFor(0, n, [&](size_t i) {
+    try {
+      textures[i] = io::pivotPainterTextures(exported.plants[i], tables.at(i), source);
+    } catch (...) {
+      failed[i] = std::current_exception();
+    }
+  }, 1);
+  for (const std::exception_ptr& e : failed)
+    if (e) std::rethrow_exception(e);
+  std::vector<std::string> written;
+  exported.pivotPainter.resize(n);
+  std::vector<std::string> names;  // file names made safe, one per plant
+  for (size_t i = 0; i < n; ++i) {
+    exported.pivotPainter[i] = textures[i].grid;
+    if (textures[i].grid.width == 0) continue;  // a plant without nodes
+    std::string name = exported.plants[i].name;
+    // Two names that are the same once made safe for a file name keep their plants apart by index.
+    const std::string file = io::pivotPainterPivotPath(outDir, stem, name).filename().string();
+    if (std::find(names.begin(), names.end(), file) != names.end()) name += "-" + std::to_string(i);
+    names.push_back(io::pivotPainterPivotPath(outDir, stem, name).filename().string());
+    const std::filesystem::path exr = io::pivotPainterPivotPath(outDir, stem, name);
+    const std::filesystem::path png = io::pivotPainterXAxisPath(outDir, stem, name);
+    io::writePivotPainterTextures(textures[i], exr, png);
+    written.push_back(exr.string());
+    written.push_back(png.string());
+  }
+  return written;
+}
+
 std::vector<std::string> writePlantFiles(const Session& session, const std::filesystem::path& outDir,
                                          const std::string& stem, const std::set<std::string>& formats,
                                          const std::string& source, io::ExportScene& exported,
@@ -58,6 +106,11 @@ std::vector<std::string> writePlantFiles(const Session& session, const std::file
     written.push_back((outDir / (stem + ".skeleton.json")).string());
   }
   if (!formats.count("glb") && !formats.count("obj")) return written;
+  // Pivot Painter textures go with the .glb, whose TEXCOORD_1 indexes them (not with the .obj).
+  if (formats.count("glb"))
+    for (std::string& f : writePivotPainterFiles(session, exported, output ? *output : session.scene().output, outDir,
+                                                 stem, source))
+      written.push_back(std::move(f));
   if (!formats.count("obj")) {
     // Alone, the .glb streams plant by plant (gltf_writer.h): less memory, and faster.
     io::writeGlb(exported, outDir / (stem + ".glb"), options);
@@ -67,7 +120,7 @@ std::vector<std::string> writePlantFiles(const Session& session, const std::file
   // Both formats write the meshes of one model.
   io::ExportModel model = io::buildExportModel(exported, options);
   if (formats.count("glb")) {
-    io::writeGlb(model, outDir / (stem + ".glb"), &exported.wind);
+    io::writeGlb(model, outDir / (stem + ".glb"), &exported.wind, &exported.pivotPainter);
     written.push_back((outDir / (stem + ".glb")).string());
   }
   if (formats.count("obj")) {

@@ -37,6 +37,16 @@ std::vector<std::string> writePlantFiles(const Session& session, const std::file
                                          const std::string& source, io::ExportScene& written,
                                          const scene::OutputSettings* output = nullptr);
 
+// With the output's pivot_painter (io/pivot_painter.h): per plant of `exported` its Pivot
+// Painter grid in exported.pivotPainter (what the .glb writer gives TEXCOORD_1 by), and its two
+// textures written beside <outDir>/<stem>.glb, each atomically, from the plants' engine wind
+// tables (exported.wind, or made here when the output has no wind_data). Returns the files
+// written (none without the option). An Error naming `source` with output.instancing, or for a
+// plant with more nodes than the textures hold.
+std::vector<std::string> writePivotPainterFiles(const Session& session, io::ExportScene& exported,
+                                                const scene::OutputSettings& output, const std::filesystem::path& outDir,
+                                                const std::string& stem, const std::string& source);
+
 // The exported plants with their Growth-Flow constants, for the wind and growth clips.
 std::vector<wind::AnimatedPlant> animatedPlants(const Session& session, const io::ExportScene& exported);
 // A wind clip of `seconds` with the scene's output settings (fps, joints, mesh) and seed.
