@@ -60,22 +60,33 @@ Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, si
   return push;
 }
 
+// The obstacles' boxes, read once for a plant (provenClear looks at them for every point).
+struct ObstacleBoxes {
+  static constexpr size_t kMax = 8;  // scenes of more obstacles are not tried
+  size_t count = 0;
+  Bounds3 box[kMax];
+  explicit ObstacleBoxes(const env::Environment& env) : count(env.obstacleCount()) {
+    if (count <= kMax)
+      for (uint32_t o = 0; o < count; ++o) box[o] = env.obstacle(o).worldBounds;
+  }
+};
+
 // Whether points lie `need` or more from every obstacle, shown without asking for closest
 // points: a point's distance to a convex obstacle is at least its distance to a plane the
 // obstacle lies behind (`planes`: those known near the points), and to any other obstacle at
 // least its distance to the obstacle's box. The hull of a curve's Bézier control points being
 // clear, the curve is; segments between clear points are, of convex obstacles and boxes alike.
 // Scenes of many obstacles are not tried (false: ask).
-bool provenClear(const env::Environment& env, const Vec3* pts, size_t count, std::initializer_list<const SupportPlane*> planes,
-                 float need) {
-  const size_t obstacles = env.obstacleCount();
-  if (obstacles > 8) return false;
+bool provenClear(const ObstacleBoxes& boxes, const Vec3* pts, size_t count,
+                 std::initializer_list<const SupportPlane*> planes, float need) {
+  const size_t obstacles = boxes.count;
+  if (obstacles > ObstacleBoxes::kMax) return false;
   Bounds3 hull;
   for (size_t j = 0; j < count; ++j) hull.extend(pts[j]);
   // A little to spare for rounding: where a query would find the bark just clear, it asks.
   const float wanted = need + 5e-6f;
   for (uint32_t o = 0; o < obstacles; ++o) {
-    const Bounds3& box = env.obstacle(o).worldBounds;
+    const Bounds3& box = boxes.box[o];
     const Vec3 gap = (box.min - hull.max).cwiseMax(hull.min - box.max).cwiseMax(Vec3::Zero());
     if (gap.squaredNorm() >= wanted * wanted) continue;
     float bound = 0.0f;
@@ -120,8 +131,8 @@ bool bladeBlocked(const env::Environment& env, const Vec3& attach, const Vec3 c[
 // Only the leaves of nodes that moved (`movedNode`, empty: none) are checked for facing a
 // surface: a leaf the model placed keeps the side it was grown with.
 // `planeOf`: per node, a plane near its start that an obstacle lies behind (or none).
-size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, const std::vector<uint8_t>& movedNode,
-                         const std::vector<SupportPlane>& planeOf) {
+size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, const ObstacleBoxes& boxes,
+                         const std::vector<uint8_t>& movedNode, const std::vector<SupportPlane>& planeOf) {
   const size_t count = p.leafCount();
   std::vector<uint8_t> keep(count, 1), changed(count, 0);
   std::vector<Quat> rotation(count);
@@ -145,7 +156,7 @@ size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, cons
       // An outline shown clear of every obstacle crosses none.
       const Vec3 outline[5] = {attach, c[0], c[1], c[2], c[3]};
       const size_t node = size_t(p.leafNode[j]);
-      if (node < planeOf.size() && provenClear(env, outline, 5, {&planeOf[node]}, 0.0f)) return;
+      if (node < planeOf.size() && provenClear(boxes, outline, 5, {&planeOf[node]}, 0.0f)) return;
       if (!bladeBlocked(env, attach, c)) return;
     }
     if (!s) s = env.closestPoint(attach, reach);
@@ -183,6 +194,7 @@ size_t keepLeavesOutside(plant::PlantModel& p, const env::Environment& env, cons
 size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int subdivisions, float margin) {
   const size_t n = p.nodeCount();
   if (n == 0 || env.obstacleCount() == 0) return 0;
+  const ObstacleBoxes boxes(env);
   // Points: every node's tip, and the start of every node that does not begin at its parent's
   // tip. Segments meeting at a point move together.
   std::vector<Vec3> dir(n), point;
@@ -256,7 +268,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
     const SupportPlane& near = plane[startPoint[askedBy[pointNode[k]]]];
     float need = 0.0f;
     for (uint32_t r = ringStart[k]; r < ringStart[k + 1]; ++r) need = std::max(need, barkClearance(rings[r].radius, margin));
-    if (provenClear(env, &point[k], 1, {&near}, need)) {
+    if (provenClear(boxes, &point[k], 1, {&near}, need)) {
       plane[k] = near;
       return;
     }
@@ -308,11 +320,11 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
       const float r = c >= 0 ? std::max(p.radius[i], p.radius[size_t(c)]) : p.radius[i];
       const float need = barkClearance(r, margin);
       const Vec3 control[4] = {curve.p1, curve.p1 + curve.m1 / 3.0f, curve.p2 - curve.m2 / 3.0f, curve.p2};
-      if (provenClear(env, control, 4, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) return;
+      if (provenClear(boxes, control, 4, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) return;
       for (float s : ringAt) {
         if (s == 0.0f && planted[startPoint[i]]) continue;  // a planted base stays as it stands
         const Vec3 onCurve = curve.point(s);
-        if (provenClear(env, &onCurve, 1, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) continue;
+        if (provenClear(boxes, &onCurve, 1, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) continue;
         const Vec3 d = curve.derivative(s);
         const float dn = d.norm();
         const Ring ring{r, dn > 1e-6f * len ? Vec3(d / dn) : Vec3(chord / len)};
@@ -354,7 +366,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
     if (move[k] == Vec3::Zero()) return;
     const Vec3 to = point[k] + move[k];
     const Vec3 path[2] = {point[k], to};
-    if (provenClear(env, path, 2, {&plane[k]}, 0.0f)) return;
+    if (provenClear(boxes, path, 2, {&plane[k]}, 0.0f)) return;
     if (env.countSegmentHits(point[k], to) > 0 || env.exactSignedDistance(to, 1e-3f) < 0.0f) move[k] = Vec3::Zero();
   }, 256);
   std::vector<uint8_t> crosses(n, 0);
@@ -366,7 +378,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
         return;
       }
       const Vec3 segment[2] = {at(a), at(b)};
-      if (provenClear(env, segment, 2, {&plane[a], &plane[b]}, 0.0f)) {
+      if (provenClear(boxes, segment, 2, {&plane[a], &plane[b]}, 0.0f)) {
         crosses[i] = 0;
         return;
       }
@@ -385,7 +397,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
   for (size_t k = 0; k < m; ++k) moved += move[k] != Vec3::Zero();
   std::vector<SupportPlane> planeOfNode(n);
   for (size_t i = 0; i < n; ++i) planeOfNode[i] = plane[startPoint[i]];
-  if (moved == 0) return keepLeavesOutside(p, env, {}, planeOfNode);
+  if (moved == 0) return keepLeavesOutside(p, env, boxes, {}, planeOfNode);
   for (size_t i = 0; i < n; ++i) {
     if (move[startPoint[i]] == Vec3::Zero() && move[tipPoint[i]] == Vec3::Zero()) continue;  // as the model left it
     const Vec3 a = at(startPoint[i]), b = at(tipPoint[i]);
@@ -411,7 +423,7 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
   }
   std::vector<uint8_t> movedNode(n);
   for (size_t i = 0; i < n; ++i) movedNode[i] = move[startPoint[i]] != Vec3::Zero() || move[tipPoint[i]] != Vec3::Zero();
-  return moved + keepLeavesOutside(p, env, movedNode, planeOfNode);
+  return moved + keepLeavesOutside(p, env, boxes, movedNode, planeOfNode);
 }
 
 }  // namespace tendril::models

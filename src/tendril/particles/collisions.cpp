@@ -178,17 +178,21 @@ void ParticleWorld::collideParticles() {
   // thousand page faults.)
   static_assert(sizeof(HashPacked) == 28);
   std::vector<HashPacked>& packed = hashPacked_;
+  std::vector<HashContact>& contact = hashContact_;
   packed.resize(entries.size());
+  contact.resize(entries.size());
+  auto grandparentOf = [&](uint32_t p) { return p == kNone ? kNone : parent_[p]; };
   parallelFor(0, entries.size(), [&](size_t e) {
     const uint32_t j = entries[e];
     packed[e] = {cellOf(xp_[j]), xp_[j], a_[j] + b_[j]};
+    const Vec3 axis = qp_[j] * Vec3(0, a_[j], 0);
+    contact[e] = {xp_[j] - axis, xp_[j] + axis, b_[j], m_[j], j, parent_[j], grandparentOf(parent_[j]),
+                  (flags_[j] & (kAnchored | kRoot)) ? 1u : 0u};
   }, 4096);
 
   // Particles within two generations of each other meet at joints by construction.
-  auto related = [&](uint32_t i, uint32_t j) {
-    const uint32_t pi = parent_[i], pj = parent_[j];
-    const uint32_t ppi = pi == kNone ? kNone : parent_[pi], ppj = pj == kNone ? kNone : parent_[pj];
-    const uint32_t ai[3] = {i, pi, ppi}, aj[3] = {j, pj, ppj};
+  auto related = [](const uint32_t (&ai)[3], const HashContact& c) {
+    const uint32_t aj[3] = {c.particle, c.parent, c.grandparent};
     for (uint32_t x : ai)
       for (uint32_t y : aj)
         if (x != kNone && x == y) return true;
@@ -204,6 +208,8 @@ void ParticleWorld::collideParticles() {
     if (!(flags_[i] & kActive) || (flags_[i] & (kRoot | kLeaf | kAnchored))) return;
     const Vec3 axisI = qp_[i] * Vec3(0, a_[i], 0);
     const Vec3 ai = xp_[i] - axisI, bi = xp_[i] + axisI;
+    const uint32_t lineage[3] = {i, parent_[i], grandparentOf(parent_[i])};
+    const float radiusI = b_[i], massI = m_[i];
     // The cells a particle touching this one can have its centre in: within this one's reach
     // plus the longest, at most the 27 neighbouring cells and, for all but the longest
     // particles, 8 to 12 of them (in the same order, so the pushes add up the same). A bucket
@@ -223,18 +229,17 @@ void ParticleWorld::collideParticles() {
             if (q.cell != cell) continue;
             const float reach = reachI + q.reach;
             if ((q.x - xp_[i]).squaredNorm() > reach * reach) continue;
-            const uint32_t j = entries[e];
-            if (j == i || related(i, j)) continue;
-            const Vec3 axisJ = qp_[j] * Vec3(0, a_[j], 0);
+            const HashContact& c = contact[e];
+            if (c.particle == i || related(lineage, c)) continue;
             Vec3 ci, cj;
-            closestSegmentPoints(ai, bi, xp_[j] - axisJ, xp_[j] + axisJ, &ci, &cj);
+            closestSegmentPoints(ai, bi, c.a, c.b, &ci, &cj);
             const Vec3 d = ci - cj;
-            const float dist = d.norm(), minDist = b_[i] + b_[j];
+            const float dist = d.norm(), minDist = radiusI + c.radius;
             if (dist >= minDist || dist < 1e-9f) continue;
             // Displace along the contact normal, in proportion to the other's mass; each side
             // moves half, as the other particle does the same from its side.
             // An anchored (or root) particle does not move: this one takes the whole way.
-            const float share = (flags_[j] & (kAnchored | kRoot)) ? 1.0f : 0.5f * m_[j] / (m_[i] + m_[j]);
+            const float share = c.held ? 1.0f : 0.5f * c.mass / (massI + c.mass);
             push += d / dist * ((minDist - dist) * share);
           }
         }

@@ -1,6 +1,7 @@
 // Plant dynamics of seed 000 §4.1 and its appendix: oriented-particle shape matching after
 // Müller & Chentanez 2011.
 #include "tendril/core/parallel.h"
+#include "tendril/core/parallel_largest_first.h"
 #include "tendril/core/match_lanes.h"
 #include "tendril/particles/shape_matching.h"
 #include "tendril/particles/world.h"
@@ -115,7 +116,11 @@ void ParticleWorld::shapeMatch() {
 
   const int iterations = std::max(1, settings_.iterations);
   const uint32_t drag = dragParticle_;
-  parallelFor(0, pieceStart_.size() - 1, [&](size_t piece) {
+  // A piece's passes run in order on one thread; the largest pieces (whole plants) go first.
+  std::vector<size_t> pieceSize(pieceStart_.size() - 1);
+  for (size_t piece = 0; piece < pieceSize.size(); ++piece)
+    pieceSize[piece] = pieceStart_[piece + 1] - pieceStart_[piece];
+  parallelForLargestFirst(pieceSize, [&](size_t piece) {
     const uint32_t begin = pieceStart_[piece], end = pieceStart_[piece + 1];
     for (int iteration = 0; iteration < iterations; ++iteration) {
       for (uint32_t k = begin; k < end; ++k) {
@@ -131,7 +136,7 @@ void ParticleWorld::shapeMatch() {
         matchOne(k);
       }
     }
-  }, 1);
+  });
 
   parallelFor(0, count, [&](size_t k) {
     const uint32_t i = pieceOrder_[k];

@@ -3,6 +3,7 @@
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
+#include "tendril/core/parallel_largest_first.h"
 #include "tendril/core/timer.h"
 #include "tendril/env/seed_check.h"
 
@@ -388,7 +389,10 @@ std::vector<plant::PlantModel> ParticleWorld::snapshots() const {
   // read and write only their own particles' entries, are taken in parallel.
   std::vector<int32_t> node(capacity(), -1);
   std::vector<plant::PlantModel> out(plants_.size());
-  parallelFor(0, plants_.size(), [&](size_t p) { out[p] = snapshotFrom(uint32_t(p), parts[p], node); }, 1);
+  std::vector<size_t> size(plants_.size());
+  for (size_t p = 0; p < size.size(); ++p)
+    size[p] = parts[p].branchParticles + parts[p].leafParticles.size() + parts[p].attachedLeaves.size();
+  parallelForLargestFirst(size, [&](size_t p) { out[p] = snapshotFrom(uint32_t(p), parts[p], node); });
   return out;
 }
 

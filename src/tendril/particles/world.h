@@ -326,8 +326,17 @@ class ParticleWorld final : public models::AirCoupling {
     Vec3 x;
     float reach;
   };
+  // What the contact itself reads of the particle, in the same table order: the ends of its
+  // axis, its radius and mass, the two particles above it and whether it is held (anchored or a
+  // root): one record in place of reads from eight arrays at the particle's slot.
+  struct HashContact {
+    Vec3 a, b;  // x_p ∓ q_p (0, a, 0)
+    float radius, mass;
+    uint32_t particle, parent, grandparent, held;
+  };
   std::vector<uint32_t> hashFill_;
   std::vector<HashPacked> hashPacked_;
+  std::vector<HashContact> hashContact_;
   std::vector<float> nextRadius_;  // scratch of grow()'s secondary growth (not saved)
   mutable std::vector<uint32_t> airIds_;  // airBodies()' list, rebuilt by each call (not saved)
 

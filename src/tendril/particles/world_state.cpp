@@ -21,8 +21,8 @@ constexpr uint32_t kWorldTagBefore = 0x57505431;  // "1TPW": Growth-Flow records
 // The one list of the world's state. Per-particle arrays and records (AttachedLeaf, FlowState,
 // the shape-matching and hash caches) go in as raw blocks, so a field added to such a record is
 // covered; a new member of ParticleWorld must be added here, except per-step scratch that is
-// rewritten before it is read (hashFill_, hashPacked_, nextRadius_). The caches are written too
-// (it is cheaper than proving that rebuilding them gives the same bits); only the
+// rewritten before it is read (hashFill_, hashPacked_, hashContact_, nextRadius_). The caches
+// are written too (it is cheaper than proving that rebuilding them gives the same bits); only the
 // obstacle-clearance proof is dropped on load (clearanceEnv_), which is exact: it only skips
 // distance samples that could not push a particle (collideObstacles()).
 template <class Self, class Visit>

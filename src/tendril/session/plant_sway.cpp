@@ -1,6 +1,6 @@
 #include "tendril/session/plant_sway.h"
 
-#include "tendril/core/parallel.h"
+#include "tendril/core/parallel_largest_first.h"
 #include "tendril/session/session.h"
 
 namespace tendril::session {
@@ -25,7 +25,10 @@ void PlantSway::pose(const Session& session, std::vector<plant::PlantModel>& pla
   const bool air = wind.settings().mode == env::WindMode::Sph;
   motions_.resize(plants.size());
   posed_.resize(plants.size());
-  parallelFor(size_t(0), plants.size(), [&](size_t p) {
+  // Plants of very unequal size, each posed on one thread: the largest first.
+  std::vector<size_t> size(plants.size());
+  for (size_t p = 0; p < plants.size(); ++p) size[p] = plants[p].nodeCount() + plants[p].leafCount();
+  parallelForLargestFirst(size, [&](size_t p) {
     std::unique_ptr<wind::WindMotion>& motion = motions_[p];
     if ((air && session.system(p).airCoupling()) || plants[p].nodeCount() == 0) {
       motion.reset();
@@ -39,8 +42,11 @@ void PlantSway::pose(const Session& session, std::vector<plant::PlantModel>& pla
       motion->setRest(plants[p]);
     }
     motion->step(t, dt, wind, posed_[p]);
-    plants[p] = posed_[p];
-  }, 1);
+    // The posed plant is handed over whole. What is left in posed_[p] has no nodes, so the
+    // next step writes every field of it anew, as it does after setRest().
+    std::swap(plants[p], posed_[p]);
+    posed_[p].position.clear();
+  });
 }
 
 }  // namespace tendril::session

@@ -6,6 +6,7 @@
 #include "tendril/core/hash.h"
 #include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
+#include "tendril/core/parallel_largest_first.h"
 #include "tendril/env/mesh_import.h"
 #include "tendril/models/stand_off.h"
 #include "tendril/scene/settings_schema.h"
@@ -202,7 +203,10 @@ std::vector<plant::PlantModel> Session::plants() const {
   // Every model's stems, thickened since they were placed, clear of their supports.
   // Their bark is cleared at the rings the scene's meshes sweep.
   const int subdivisions = scene_.output.subdivisions;
-  parallelFor(size_t(0), out.size(), [&](size_t i) { models::keepStemsOutside(out[i], *env_, subdivisions); }, 1);
+  // Plants of very unequal size: the largest first (each also shares out its own work).
+  std::vector<size_t> size(out.size());
+  for (size_t i = 0; i < out.size(); ++i) size[i] = out[i].nodeCount() + out[i].leafCount();
+  parallelForLargestFirst(size, [&](size_t i) { models::keepStemsOutside(out[i], *env_, subdivisions); });
   return out;
 }
 
