@@ -6,6 +6,8 @@
 #include "tendril/wind/engine_wind.h"
 
 #include "support/determinism.h"
+#include "support/example_plants.h"
+#include "support/gltf_read.h"
 #include "support/gltf_validator.h"
 #include "support/run_command.h"
 #include "support/test_paths.h"
@@ -50,34 +52,13 @@ const PlantModel& grownTree() {
 }
 
 // Seed 004's chestnut (a component graph with leaves).
-const PlantModel& chestnut() {
-  static const PlantModel p = [] {
-    auto g = graph::loadGraph(test::sourceDir() / "examples/graphs/chestnut.json");
-    return graph::generatePlant(g, {g->seed, {}});
-  }();
-  return p;
-}
+const PlantModel& chestnut() { return test::exampleChestnut(); }
 
-// One float attribute of a primitive, `width` floats per vertex.
 std::vector<float> floats(const tinygltf::Model& m, const tinygltf::Primitive& prim, const std::string& name, int width) {
-  auto it = prim.attributes.find(name);
-  if (it == prim.attributes.end()) return {};
-  const tinygltf::Accessor& a = m.accessors[size_t(it->second)];
-  const tinygltf::BufferView& v = m.bufferViews[size_t(a.bufferView)];
-  EXPECT_EQ(a.componentType, TINYGLTF_COMPONENT_TYPE_FLOAT) << name;
-  EXPECT_EQ(tinygltf::GetNumComponentsInType(uint32_t(a.type)), width) << name;
-  std::vector<float> out(a.count * size_t(width));
-  std::memcpy(out.data(), m.buffers[size_t(v.buffer)].data.data() + v.byteOffset + a.byteOffset, out.size() * sizeof(float));
-  return out;
+  return test::floatAttribute(m, prim, name, width);
 }
 
-tinygltf::Model load(const fs::path& file) {
-  tinygltf::Model m;
-  tinygltf::TinyGLTF loader;
-  std::string err, warn;
-  EXPECT_TRUE(loader.LoadBinaryFromFile(&m, &err, &warn, file.string())) << err;
-  return m;
-}
+tinygltf::Model load(const fs::path& file) { return test::loadGlb(file); }
 
 // A plant vertex as the .glb has it.
 struct WindVertex {

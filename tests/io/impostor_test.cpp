@@ -6,6 +6,7 @@
 
 #include "support/determinism.h"
 #include "support/eight_views.h"
+#include "support/example_plants.h"
 #include "support/gltf_validator.h"
 #include "support/test_paths.h"
 #include "tendril/core/error.h"
@@ -39,13 +40,7 @@ namespace fs = std::filesystem;
 using plant::PlantModel;
 
 // Seed 004's chestnut (a component graph with leaves).
-const PlantModel& chestnut() {
-  static const PlantModel p = [] {
-    auto g = graph::loadGraph(test::sourceDir() / "examples/graphs/chestnut.json");
-    return graph::generatePlant(g, {g->seed, {}});
-  }();
-  return p;
-}
+const PlantModel& chestnut() { return test::exampleChestnut(); }
 
 // A climbing ivy (seed 003) on the default scene's wall.
 const PlantModel& climbingIvy() {

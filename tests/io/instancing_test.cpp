@@ -6,6 +6,7 @@
 #include "tendril/io/instancing.h"
 
 #include "support/determinism.h"
+#include "support/gltf_read.h"
 #include "support/gltf_validator.h"
 #include "support/run_command.h"
 #include "support/test_paths.h"
@@ -58,13 +59,7 @@ ExportOptions options(bool instancing, int levels = 1, bool atlas = false) {
   return o;
 }
 
-tinygltf::Model load(const fs::path& file) {
-  tinygltf::Model m;
-  tinygltf::TinyGLTF loader;
-  std::string err, warn;
-  EXPECT_TRUE(loader.LoadBinaryFromFile(&m, &err, &warn, file.string())) << err;
-  return m;
-}
+tinygltf::Model load(const fs::path& file) { return test::loadGlb(file); }
 
 template <class T>
 std::vector<T> accessorData(const tinygltf::Model& m, int accessor) {
