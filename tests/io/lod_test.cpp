@@ -7,6 +7,7 @@
 #include "support/eight_views.h"
 #include "support/gltf_validator.h"
 #include "support/run_command.h"
+#include "support/silhouette.h"
 #include "support/synthetic_plants.h"
 #include "support/test_paths.h"
 #include "tendril/core/error.h"
@@ -116,57 +117,10 @@ Bounds3 boundsOf(const TriangleMesh& m) {
   return b;
 }
 
-// Silhouette area seen along `view`, orthographically: the cells of a res × res grid over the
-// square `frame` (centre, half size, in the view's image plane) whose centres some triangle covers.
-struct ViewFrame {
-  Vec3 u, v;       // the image plane's axes
-  Vec2 centre;     // in (u, v)
-  float half = 0;  // half the square's side
-};
-ViewFrame viewFrame(const TriangleMesh& m, const Vec3& view) {
-  ViewFrame f;
-  f.u = anyPerpendicular(view).normalized();
-  f.v = view.cross(f.u).normalized();
-  Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
-  for (uint32_t i : m.indices) {
-    const Vec2 q(m.positions[i].dot(f.u), m.positions[i].dot(f.v));
-    lo = lo.cwiseMin(q);
-    hi = hi.cwiseMax(q);
-  }
-  f.centre = 0.5f * (lo + hi);
-  f.half = 0.55f * (hi - lo).maxCoeff();
-  return f;
-}
-size_t silhouette(const TriangleMesh& m, const ViewFrame& f, int res = 400) {
-  const float scale = float(res) / (2.0f * f.half);
-  std::vector<uint8_t> cell(size_t(res) * size_t(res), 0);
-  for (size_t t = 0; t + 2 < m.indices.size(); t += 3) {
-    Vec2 p[3];
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& q = m.positions[m.indices[t + k]];
-      p[k] = (Vec2(q.dot(f.u), q.dot(f.v)) - f.centre) * scale + Vec2::Constant(0.5f * float(res));
-    }
-    const float area2 = (p[1] - p[0]).x() * (p[2] - p[0]).y() - (p[1] - p[0]).y() * (p[2] - p[0]).x();
-    if (area2 == 0.0f) continue;
-    const int x0 = std::max(0, int(std::floor(std::min({p[0].x(), p[1].x(), p[2].x()}))));
-    const int x1 = std::min(res - 1, int(std::ceil(std::max({p[0].x(), p[1].x(), p[2].x()}))));
-    const int y0 = std::max(0, int(std::floor(std::min({p[0].y(), p[1].y(), p[2].y()}))));
-    const int y1 = std::min(res - 1, int(std::ceil(std::max({p[0].y(), p[1].y(), p[2].y()}))));
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const Vec2 c(float(x) + 0.5f, float(y) + 0.5f);
-        float w[3];
-        for (int k = 0; k < 3; ++k) {
-          const Vec2 a = p[(k + 1) % 3] - c, b = p[(k + 2) % 3] - c;
-          w[k] = (a.x() * b.y() - a.y() * b.x()) / area2;
-        }
-        if (w[0] >= 0 && w[1] >= 0 && w[2] >= 0) cell[size_t(y) * size_t(res) + size_t(x)] = 1;
-      }
-  }
-  size_t area = 0;
-  for (uint8_t c : cell) area += c;
-  return area;
-}
+// Silhouettes (support/silhouette.h) of whole meshes, untextured.
+using test::ViewFrame;
+ViewFrame viewFrame(const TriangleMesh& m, const Vec3& view) { return test::viewFrame({{&m}}, view, 0.55f); }
+size_t silhouette(const TriangleMesh& m, const ViewFrame& f) { return test::silhouette({{&m}}, f); }
 
 // A plant mesh's leaves alone, as one mesh.
 TriangleMesh leavesOf(const mesh::PlantMesh& m) {
