@@ -5,9 +5,7 @@
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
 #include "tendril/core/timer.h"
-#include "tendril/io/gltf_writer.h"
 #include "tendril/io/image.h"
-#include "tendril/io/obj_writer.h"
 #include "tendril/session/plant_export.h"
 #include "tendril/session/session_file.h"
 
@@ -171,13 +169,15 @@ void Studio::Impl::exportFile(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
   if (ext != ".glb" && ext != ".obj") throw Error(path.string(), "", "expected a .glb or .obj file name");
-  // As `tendril grow` writes them: the scene's output settings (radial segments, subdivisions,
-  // the obstacles when it asks for them).
-  const io::ExportScene scene = session::exportScene(*session, session->scene().source);
-  const io::ExportOptions options = session::exportOptions(session->scene().output);
-  if (ext == ".glb") io::writeGlb(scene, path, options);
-  else io::writeObj(scene, path, options);
-  status = fmt::format("exported {} plant(s) to {}", scene.plants.size(), path.string());
+  // Through what `tendril grow` writes with (session::writePlantFiles): the scene's output
+  // settings — radial segments, subdivisions, the obstacles when it asks for them, levels of
+  // detail, leaf atlas, impostor, maps, engine wind data and the Pivot Painter textures beside
+  // the .glb.
+  io::ExportScene scene;
+  const std::vector<std::string> files =
+      session::writePlantFiles(*session, path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path(),
+                               path.stem().string(), {ext.substr(1)}, session->scene().source, scene);
+  status = fmt::format("exported {} plant(s) to {}", scene.plants.size(), fmt::join(files, ", "));
   statusIsError = false;
 }
 

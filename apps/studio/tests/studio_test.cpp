@@ -408,12 +408,13 @@ TEST(StudioHeadless, ExportUsesTheScenesOutputSettings) {
   if (!haveXvfb()) GTEST_SKIP() << "xvfb-run is not installed";
   fs::path dir = scratchDir();
   // A graph plant (it does not grow: the frame count does not matter) on a box, written with
-  // 5 vertices around each stem, 2 samples per segment and the obstacles.
+  // 5 vertices around each stem, 2 samples per segment, the obstacles, two levels of detail,
+  // engine wind data and the Pivot Painter textures.
   const std::string graph = (fs::path(TENDRIL_EXAMPLES_DIR) / "graphs/sunflower.json").string();
   std::ofstream(dir / "scene.json") << R"({"tendril": 1, "environment": {"obstacles": [{"name": "base", "type": "box",
       "size": [1, 0.2, 1], "position": [0, -0.1, 0]}]}, "output": {"radial_segments": 5, "subdivisions": 2,
-      "include_obstacles": true}, "plants": [{"name": "sunflower", "model": "graph", "graph": ")" + graph +
-                                           R"(", "position": [0, 0, 0]}]})";
+      "include_obstacles": true, "lods": 2, "wind_data": true, "pivot_painter": true},
+      "plants": [{"name": "sunflower", "model": "graph", "graph": ")" + graph + R"(", "position": [0, 0, 0]}]})";
   std::string out, err;
   ASSERT_EQ(runStudio(dir,
                       quoted(dir / "scene.json") + " --frames 1 --size 400x300 --screenshot " + quoted(dir / "a.png") +
@@ -421,14 +422,22 @@ TEST(StudioHeadless, ExportUsesTheScenesOutputSettings) {
                       true, &out, &err),
             0)
       << err;
-  // What tendril grow writes for the scene: the same bytes.
+  // What tendril grow writes for the scene (session::writePlantFiles): the same bytes, the
+  // Pivot Painter textures beside the .glb included.
   session::Session s(scene::loadScene(dir / "scene.json"));
-  const io::ExportScene scene = session::exportScene(s, "scene.json");
+  fs::create_directories(dir / "grow");
+  io::ExportScene scene;
+  const std::vector<std::string> files = session::writePlantFiles(s, dir / "grow", "plants", {"glb"}, "scene.json", scene);
   ASSERT_EQ(scene.meshes.size(), 1u);
-  io::writeGlb(scene, dir / "grow.glb", session::exportOptions(s.scene().output));
+  ASSERT_EQ(files.size(), 3u);  // the two textures and the .glb
+  for (const std::string& file : files) {
+    const fs::path name = fs::path(file).filename();
+    SCOPED_TRACE(name.string());
+    ASSERT_TRUE(fs::exists(dir / name));
+    EXPECT_TRUE(readText(dir / name) == readText(file));
+  }
   const std::string exported = readText(dir / "plants.glb");
   EXPECT_GT(exported.size(), 10000u);
-  EXPECT_TRUE(exported == readText(dir / "grow.glb"));
   // The default settings would have written other bytes.
   io::writeGlb(scene, dir / "default.glb");
   EXPECT_FALSE(exported == readText(dir / "default.glb"));
