@@ -45,14 +45,7 @@ using plant::PlantModel;
 const PlantModel& chestnut() { return test::exampleChestnut(); }
 
 // A climbing ivy (seed 003) on the default scene's wall.
-const PlantModel& climbingIvy() {
-  static const PlantModel p = [] {
-    std::unique_ptr<session::Session> s = session::Session::open(test::sourceDir() / "examples/scenes/default.json");
-    s->run(160);
-    return s->plants().at(1);
-  }();
-  return p;
-}
+const PlantModel& climbingIvy() { return test::exampleClimbingIvy(); }
 
 // The sunflower component graph (seed 004): primitives on a stem.
 const PlantModel& sunflower() {

@@ -5,6 +5,7 @@
 
 #include "support/determinism.h"
 #include "support/eight_views.h"
+#include "support/example_plants.h"
 #include "support/gltf_validator.h"
 #include "support/run_command.h"
 #include "support/silhouette.h"
@@ -51,14 +52,7 @@ PlantModel grown(const std::string& sceneJson, uint32_t steps, size_t which = 0)
 }
 
 // A climbing ivy (seed 003) on the default scene's wall.
-const PlantModel& climbingIvy() {
-  static const PlantModel p = [] {
-    std::unique_ptr<session::Session> s = session::Session::open(test::sourceDir() / "examples/scenes/default.json");
-    s->run(160);
-    return s->plants().at(1);
-  }();
-  return p;
-}
+const PlantModel& climbingIvy() { return test::exampleClimbingIvy(); }
 
 // The L-system ivy of examples/scenes/ivy-lsystem.json.
 const PlantModel& lsystemPlant() {
