@@ -65,6 +65,28 @@ TEST(MatchLanes, QuaternionAndVectorOperationsMatchEigenBitForBit) {
   }
 }
 
+TEST(MatchLanes, PackAndStoreMoveEveryFloatToItsLaneAndBack) {
+  Inputs in;
+  Quat q[4], qBack[4];
+  Mat3 m[4], mBack[4];
+  for (int l = 0; l < 4; ++l) q[l] = in.quat(), m[l] = in.mat(), qBack[l] = Quat::Identity(), mBack[l].setZero();
+  const Q4 Q = pack(q[0], q[1], q[2], q[3]);
+  const M3 M = pack(m[0], m[1], m[2], m[3]);
+  for (int l = 0; l < 4; ++l) {
+    SCOPED_TRACE(testing::Message() << "lane " << l);
+    EXPECT_TRUE(sameBits(Q.x[l], q[l].x()) && sameBits(Q.y[l], q[l].y()) && sameBits(Q.z[l], q[l].z()) &&
+                sameBits(Q.w[l], q[l].w()));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) EXPECT_TRUE(sameBits(M.m[i][j][l], m[l](i, j))) << i << ", " << j;
+  }
+  store(Q, &qBack[0], &qBack[1], &qBack[2], &qBack[3]);
+  store(M, &mBack[0], &mBack[1], &mBack[2], &mBack[3]);
+  for (int l = 0; l < 4; ++l) {
+    EXPECT_TRUE(sameBits(qBack[l], q[l])) << "lane " << l;
+    EXPECT_TRUE(sameBits(mBack[l], m[l])) << "lane " << l;
+  }
+}
+
 TEST(MatchLanes, MomentTermsAndRotationExtractionMatchTheScalarFit) {
   Inputs in;
   for (int round = 0; round < 2000; ++round) {

@@ -9,6 +9,7 @@
 #include "tendril/env/primitives.h"
 #include "tendril/models/stand_off.h"
 #include "tendril/particles/particle_model.h"
+#include "tendril/particles/shape_matching.h"
 #include "tendril/scene/scene.h"
 
 #include <gtest/gtest.h>
@@ -397,6 +398,32 @@ TEST(ParticleDynamics, SameSeedSameSnapshotForAnyThreadCount) {
   };
   const uint64_t one = tendril::test::sameAtEveryThreadCount([&] { return run(1); });
   EXPECT_NE(one, run(2));
+}
+
+// The shape-matching passes' AVX2 version and the baseline one do the same operations in the
+// same order, without fused multiply-adds: a growing, dragged pair of plants ends in the same bits.
+TEST(ParticleDynamics, Avx2AndBaselineShapeMatchingGiveTheSameBits) {
+  if (!avx2ShapeMatching()) GTEST_SKIP() << "this CPU runs only the baseline passes";
+  auto env = makeEnv(kGroundAndWall);
+  auto run = [&] {
+    ParticleWorld w(WorldSettings{});
+    ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
+    s.maxParticles = 1200;
+    w.addPlant("a", s, Vec3(-0.5f, 0.03f, 0.11f), Vec3(0, 1, 0), 1, *env);
+    w.addPlant("b", s, Vec3(0.5f, 0.03f, 0.11f), Vec3(0, 1, 0), 2, *env);
+    for (int k = 0; k < 300; ++k) {
+      if (k == 200) w.setDrag(uint32_t(w.capacity() / 2), Vec3(0, 2, 1), 0.8f);
+      w.step(*env);
+    }
+    EXPECT_GT(w.particleCount(), 800u);
+    return plant::contentHash(std::vector{w.snapshot(0), w.snapshot(1)});
+  };
+  const uint64_t avx2 = run();
+  forceBaselineShapeMatching(true);
+  EXPECT_FALSE(avx2ShapeMatching());
+  const uint64_t baseline = run();
+  forceBaselineShapeMatching(false);
+  EXPECT_EQ(avx2, baseline);
 }
 
 TEST(ParticleWorld, AllSnapshotsAtOnceEqualOneByOne) {

@@ -124,14 +124,34 @@ inline F4 pack(float a, float b, float c, float d) { return F4{a, b, c, d}; }
 inline V3 pack(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
   return {pack(a.x(), b.x(), c.x(), d.x()), pack(a.y(), b.y(), c.y(), d.y()), pack(a.z(), b.z(), c.z(), d.z())};
 }
+
+// Quaternions and matrices are contiguous floats (Eigen: x, y, z, w; a 3 × 3 matrix column
+// by column): four of them go to lanes, and back, by 4 × 4 transposes of whole loads and
+// stores rather than one float at a time (the moves were most of the four-lane fit's work).
+inline void transpose(__m128& a, __m128& b, __m128& c, __m128& d) {
+  const __m128 ab0 = _mm_unpacklo_ps(a, b), cd0 = _mm_unpacklo_ps(c, d);
+  const __m128 ab1 = _mm_unpackhi_ps(a, b), cd1 = _mm_unpackhi_ps(c, d);
+  a = _mm_movelh_ps(ab0, cd0), b = _mm_movehl_ps(cd0, ab0);
+  c = _mm_movelh_ps(ab1, cd1), d = _mm_movehl_ps(cd1, ab1);
+}
 inline Q4 pack(const Quat& a, const Quat& b, const Quat& c, const Quat& d) {
-  return {pack(a.x(), b.x(), c.x(), d.x()), pack(a.y(), b.y(), c.y(), d.y()), pack(a.z(), b.z(), c.z(), d.z()),
-          pack(a.w(), b.w(), c.w(), d.w())};
+  __m128 x = _mm_loadu_ps(a.coeffs().data()), y = _mm_loadu_ps(b.coeffs().data()), z = _mm_loadu_ps(c.coeffs().data()),
+         w = _mm_loadu_ps(d.coeffs().data());
+  transpose(x, y, z, w);
+  return {F4(x), F4(y), F4(z), F4(w)};
 }
 inline M3 pack(const Mat3& a, const Mat3& b, const Mat3& c, const Mat3& d) {
+  // Column-major: floats 0–3 are (0,0) (1,0) (2,0) (0,1), 4–7 are (1,1) (2,1) (0,2) (1,2).
+  __m128 e0 = _mm_loadu_ps(a.data()), e1 = _mm_loadu_ps(b.data()), e2 = _mm_loadu_ps(c.data()),
+         e3 = _mm_loadu_ps(d.data());
+  transpose(e0, e1, e2, e3);
+  __m128 f0 = _mm_loadu_ps(a.data() + 4), f1 = _mm_loadu_ps(b.data() + 4), f2 = _mm_loadu_ps(c.data() + 4),
+         f3 = _mm_loadu_ps(d.data() + 4);
+  transpose(f0, f1, f2, f3);
   M3 r;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r.m[i][j] = pack(a(i, j), b(i, j), c(i, j), d(i, j));
+  r.m[0][0] = F4(e0), r.m[1][0] = F4(e1), r.m[2][0] = F4(e2), r.m[0][1] = F4(e3);
+  r.m[1][1] = F4(f0), r.m[2][1] = F4(f1), r.m[0][2] = F4(f2), r.m[1][2] = F4(f3);
+  r.m[2][2] = pack(a(2, 2), b(2, 2), c(2, 2), d(2, 2));
   return r;
 }
 inline Vec3 lane(const V3& v, int l) { return Vec3(v.x[l], v.y[l], v.z[l]); }
@@ -141,6 +161,23 @@ inline Mat3 lane(const M3& a, int l) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) r(i, j) = a.m[i][j][l];
   return r;
+}
+// The four lanes written to four quaternions or matrices (the inverse of pack()).
+inline void store(const Q4& q, Quat* a, Quat* b, Quat* c, Quat* d) {
+  __m128 x = __m128(q.x), y = __m128(q.y), z = __m128(q.z), w = __m128(q.w);
+  transpose(x, y, z, w);
+  _mm_storeu_ps(a->coeffs().data(), x), _mm_storeu_ps(b->coeffs().data(), y);
+  _mm_storeu_ps(c->coeffs().data(), z), _mm_storeu_ps(d->coeffs().data(), w);
+}
+inline void store(const M3& m, Mat3* a, Mat3* b, Mat3* c, Mat3* d) {
+  __m128 e0 = __m128(m.m[0][0]), e1 = __m128(m.m[1][0]), e2 = __m128(m.m[2][0]), e3 = __m128(m.m[0][1]);
+  transpose(e0, e1, e2, e3);
+  _mm_storeu_ps(a->data(), e0), _mm_storeu_ps(b->data(), e1), _mm_storeu_ps(c->data(), e2), _mm_storeu_ps(d->data(), e3);
+  __m128 f0 = __m128(m.m[1][1]), f1 = __m128(m.m[2][1]), f2 = __m128(m.m[0][2]), f3 = __m128(m.m[1][2]);
+  transpose(f0, f1, f2, f3);
+  _mm_storeu_ps(a->data() + 4, f0), _mm_storeu_ps(b->data() + 4, f1), _mm_storeu_ps(c->data() + 4, f2);
+  _mm_storeu_ps(d->data() + 4, f3);
+  (*a)(2, 2) = m.m[2][2][0], (*b)(2, 2) = m.m[2][2][1], (*c)(2, 2) = m.m[2][2][2], (*d)(2, 2) = m.m[2][2][3];
 }
 
 }  // namespace tendril::lanes

@@ -7,6 +7,7 @@
 #include "tendril/particles/world.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 namespace tendril::particles {
@@ -31,7 +32,37 @@ constexpr float kParentGroupWeight = 4.0f;
 constexpr float kOwnGroupWeight = 2.0f;
 constexpr float kRootMassScale = 1000.0f;  // see shapeMatch()
 
+// The passes of shapeMatch() for the baseline and, where the CPU has it, for AVX2: `passes`
+// and everything it calls within this file (the fits and the lane arithmetic) are inlined into
+// each (flatten). Four-lane vectors only: their ABI is the same in both.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__AVX2__)
+#define TENDRIL_MATCH_AVX2 1
+template <class Passes>
+[[gnu::target("avx2"), gnu::flatten]] void runPassesAvx2(const Passes& passes) {
+  passes();
+}
+#else
+#define TENDRIL_MATCH_AVX2 0
+#endif
+template <class Passes>
+[[gnu::flatten]] void runPassesBaseline(const Passes& passes) {
+  passes();
+}
+
+std::atomic<bool> gBaselineShapeMatching{false};
+
 }  // namespace
+
+bool avx2ShapeMatching() {
+#if TENDRIL_MATCH_AVX2
+  static const bool hasAvx2 = __builtin_cpu_supports("avx2");
+  return hasAvx2 && !gBaselineShapeMatching.load(std::memory_order_relaxed);
+#else
+  return false;
+#endif
+}
+
+void forceBaselineShapeMatching(bool on) { gBaselineShapeMatching.store(on, std::memory_order_relaxed); }
 
 void ParticleWorld::predict() {
   const float dt = settings_.dt;
@@ -120,22 +151,30 @@ void ParticleWorld::shapeMatch() {
   std::vector<size_t> pieceSize(pieceStart_.size() - 1);
   for (size_t piece = 0; piece < pieceSize.size(); ++piece)
     pieceSize[piece] = pieceStart_[piece + 1] - pieceStart_[piece];
+  const bool avx2 = avx2ShapeMatching();
   parallelForLargestFirst(pieceSize, [&](size_t piece) {
     const uint32_t begin = pieceStart_[piece], end = pieceStart_[piece + 1];
-    for (int iteration = 0; iteration < iterations; ++iteration) {
-      for (uint32_t k = begin; k < end; ++k) {
-        // Four particles side by side where none of them is another's parent (their parents
-        // come before k: the piece order is breadth first) and none is held by the drag.
-        if (k + 4 <= end && matchParent_[k] < k && matchParent_[k + 1] < k && matchParent_[k + 2] < k &&
-            matchParent_[k + 3] < k && pieceOrder_[k] != drag && pieceOrder_[k + 1] != drag &&
-            pieceOrder_[k + 2] != drag && pieceOrder_[k + 3] != drag) {
-          matchFour(k);
-          k += 3;
-          continue;
+    auto passes = [&] {
+      for (int iteration = 0; iteration < iterations; ++iteration) {
+        for (uint32_t k = begin; k < end; ++k) {
+          // Four particles side by side where none of them is another's parent (their parents
+          // come before k: the piece order is breadth first) and none is held by the drag.
+          if (k + 4 <= end && matchParent_[k] < k && matchParent_[k + 1] < k && matchParent_[k + 2] < k &&
+              matchParent_[k + 3] < k && pieceOrder_[k] != drag && pieceOrder_[k + 1] != drag &&
+              pieceOrder_[k + 2] != drag && pieceOrder_[k + 3] != drag) {
+            matchFour(k);
+            k += 3;
+            continue;
+          }
+          matchOne(k);
         }
-        matchOne(k);
       }
-    }
+    };
+#if TENDRIL_MATCH_AVX2
+    if (avx2) return runPassesAvx2(passes);
+#endif
+    (void)avx2;
+    runPassesBaseline(passes);
   });
 
   parallelFor(0, count, [&](size_t k) {
@@ -219,7 +258,7 @@ void ParticleWorld::gatherMatchRest() {
 // parent, none dragged), one per lane (core/match_lanes.h): bit for bit the scalar fit of each, and
 // the four independent chains of arithmetic run side by side (about 40 % less time here than
 // the same work one particle after the other, bench/README.md).
-void ParticleWorld::matchFour(uint32_t k) {
+inline void ParticleWorld::matchFour(uint32_t k) {
   using namespace lanes;
   MatchNode* n[4] = {&matchNode_[k], &matchNode_[k + 1], &matchNode_[k + 2], &matchNode_[k + 3]};
   const MatchRest* r[4] = {&matchRest_[k], &matchRest_[k + 1], &matchRest_[k + 2], &matchRest_[k + 3]};
@@ -279,18 +318,16 @@ void ParticleWorld::matchFour(uint32_t k) {
   const Q4 frame = q * conjugate(qr);
   const M3 moment =
       toRotationMatrix(q) * pack(r[0]->restMoment, r[1]->restMoment, r[2]->restMoment, r[3]->restMoment);
-  for (int l = 0; l < 4; ++l) {
-    n[l]->x = lane(xn, l);
-    n[l]->q = lane(q, l);
-    n[l]->rotation = lane(own, l);
-    n[l]->frame = lane(frame, l);
-    n[l]->moment = lane(moment, l);
-  }
+  for (int l = 0; l < 4; ++l) n[l]->x = lane(xn, l);
+  store(q, &n[0]->q, &n[1]->q, &n[2]->q, &n[3]->q);
+  store(own, &n[0]->rotation, &n[1]->rotation, &n[2]->rotation, &n[3]->rotation);
+  store(frame, &n[0]->frame, &n[1]->frame, &n[2]->frame, &n[3]->frame);
+  store(moment, &n[0]->moment, &n[1]->moment, &n[2]->moment, &n[3]->moment);
 }
 
 // One particle's fit in its pass (eq. 3–5, 14–15, §4.3): its group's moment and rotation, the
 // goal blended from its own and its parent's group, the drag and the anchor.
-void ParticleWorld::matchOne(uint32_t k) {
+inline void ParticleWorld::matchOne(uint32_t k) {
   const MatchRest& r = matchRest_[k];
   MatchNode& node = matchNode_[k];
   const uint32_t i = pieceOrder_[k];

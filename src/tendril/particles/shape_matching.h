@@ -13,4 +13,11 @@ namespace tendril::particles {
 // reflection.
 Quat extractRotation(const Mat3& A, Quat q, int maxIterations = 8);
 
+// The shape-matching passes are compiled twice, for the baseline instruction set and for AVX2
+// (the same SSE operations in three-operand form, without fused multiply-adds: the same bits),
+// and the AVX2 ones run where the CPU has it. Whether they run now, and a switch that keeps to
+// the baseline ones (process-wide, for tests).
+bool avx2ShapeMatching();
+void forceBaselineShapeMatching(bool on);
+
 }  // namespace tendril::particles
