@@ -7,6 +7,7 @@
 #include "tendril/scene/scene.h"
 #include "tendril/session/session.h"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -135,6 +136,52 @@ TEST(ClimbGrowth, GoesRoundAnOpeningInsteadOfBridgingIt) {
     gotPast += top > 1.9f;  // above the window
   }
   EXPECT_GE(gotPast, 5) << "of 6 seeds grew round the window to above it";
+}
+
+// The mean vertical component of the directions of a plant's climbing segments, and its height.
+struct Upness {
+  double meanUp = 0.0;
+  float top = 0.0f;
+};
+Upness upness(const plant::PlantModel& p) {
+  Upness u;
+  size_t n = 0;
+  for (size_t i = 0; i < p.nodeCount(); ++i) {
+    u.top = std::max(u.top, p.tip(i).y());
+    if (!(p.flags[i] & plant::kNodeClimbing)) continue;
+    u.meanUp += p.direction(i).y();
+    ++n;
+  }
+  if (n) u.meanUp /= double(n);
+  return u;
+}
+
+TEST(ClimbGrowth, ClimbingTipsGrowUpwardWithoutLight) {
+  // Seed 003 §3.6, eq. 7: a climbing tip "starts to grow upwards, clinging to the nearest
+  // object" — v_up, not only the light, makes it climb. On a wall in a scene without lights
+  // the ivy's climbing segments point up by 0.63 on average over these seeds (51° from the
+  // vertical); without v_up (up = 0), by 0.33 (71°): they spread nearly sideways.
+  const std::string scene = std::string(R"({"tendril": 1, "seed": 0, "environment": {"obstacles": [)") + kGround +
+                            R"(, {"name": "wall", "type": "wall", "size": [6, 4, 0.2]}]},
+                 "plants": [{"name": "ivy", "position": [0, 0, 0.13], "species": {"base": "japanese-ivy",
+                   "tropisms": {"up": UP}}}]})";
+  auto with = [&](int seed, const char* up) {
+    std::string s = withSeed(scene, seed);
+    return s.replace(s.find("UP"), 2, up);
+  };
+  const float ivyUp = climb::ClimbSpecies().up;
+  double meanWith = 0.0, meanWithout = 0.0;
+  for (int seed = 1; seed <= 4; ++seed) {
+    SCOPED_TRACE(seed);
+    auto a = grow(with(seed, fmt::format("{}", ivyUp).c_str()), 160);
+    auto b = grow(with(seed, "0"), 160);
+    expectClean(*a);
+    meanWith += upness(a->plants()[0]).meanUp / 4;
+    meanWithout += upness(b->plants()[0]).meanUp / 4;
+    EXPECT_GT(plant::computeStats(a->plants()[0]).bounds.max.y(), 2.5f);  // it climbed the 4 m wall
+  }
+  EXPECT_GT(meanWith, 0.55) << "without v_up: " << meanWithout;
+  EXPECT_GT(meanWith, meanWithout + 0.2);
 }
 
 TEST(ClimbGrowth, DecreaseRatiosFollowEquation8) {

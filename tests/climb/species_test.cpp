@@ -25,6 +25,7 @@ void expectSameSpecies(const ClimbSpecies& a, const ClimbSpecies& b) {
   EXPECT_EQ(a.lightAmbient, b.lightAmbient);
   EXPECT_EQ(a.randomness, b.randomness);
   EXPECT_EQ(a.adhesion, b.adhesion);
+  EXPECT_EQ(a.up, b.up);
   EXPECT_EQ(a.userDirection, b.userDirection);
   EXPECT_EQ(a.userDirectionStrength, b.userDirectionStrength);
   EXPECT_EQ(a.windStrength, b.windStrength);
@@ -115,6 +116,7 @@ TEST(ClimbSpecies, BadValuesAreErrorsWithPointers) {
   EXPECT_EQ(error(R"({"leaf": {"textures": []}})"),
             "s.json:/leaf/textures: expected a non-empty array of texture names or image paths");
   EXPECT_EQ(error(R"({"tropisms": {"ligth": 1}})"), "s.json:/tropisms/ligth: unknown key \"ligth\" (did you mean \"light\"?)");
+  EXPECT_EQ(error(R"({"tropisms": {"up": -0.1}})"), "s.json:/tropisms/up: must be in [0, 3], got -0.1");
 }
 
 }  // namespace

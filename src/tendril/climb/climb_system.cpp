@@ -21,6 +21,7 @@ constexpr uint64_t kPurposeRandomTropism = purposeId("climb.random-tropism");
 constexpr uint64_t kPurposeBranch = purposeId("climb.branch");
 constexpr uint64_t kPurposeLeaf = purposeId("climb.leaf");
 constexpr uint64_t kPurposeHold = purposeId("climb.hold");
+const float kCos45 = std::cos(radians(45.0f));
 
 // Where a new segment may go: the end point and direction after collision avoidance, and the
 // closest surface within `reach` of the end (the tip's support at the next step).
@@ -210,7 +211,9 @@ void ClimbSystem::placeLeaves(const ClimbSpecies& s, const Tip& t, const Vec3& d
   // Blades lie parallel to the surface nearest to them, upper side away from it (seed
   // 003 §3.10); in free air they turn toward the light (seed 000 §4.3).
   Vec3 leafUp = frame.col(2);
-  if (auto near = env.closestPoint(attach, s.adhesionDistance, endSupport ? &*endSupport : nullptr)) {
+  const std::optional<env::SurfacePoint> near =
+      env.closestPoint(attach, s.adhesionDistance, endSupport ? &*endSupport : nullptr);
+  if (near) {
     leafUp = near->away;
   } else if (s.light > 0.0f) {
     Vec3 toLight = env.light(attach).nominal;
@@ -229,6 +232,21 @@ void ClimbSystem::placeLeaves(const ClimbSpecies& s, const Tip& t, const Vec3& d
     float angle = (side == 0 ? 1.0f : -1.0f) * (s.leafSpread + s.leafJitter * lr.uniform(-1.0f, 1.0f));
     Blade& b = blades[side];
     b.nodeFromLeaf = (nodeFromBlade * axisAngle(Vec3::UnitZ(), angle)).normalized();
+    // On a curved support a blade laid on the tangent plane at its attachment rises off the
+    // surface toward its tip, by the arc its centre spans (on a 15 cm column 7.5° for half the
+    // blades, 15° or more for one in 20: tests/climb/climb_leaf_angle_test.cpp). It lies on
+    // the surface under its centre instead, where a flat leaf pressed on the bark touches it,
+    // when that is the same surface curving: the same obstacle, its normal within 45° of the
+    // one at the attachment (at a corner the other surface would turn the blade into the one
+    // it grows from).
+    if (near) {
+      const Quat world = node.orientation * b.nodeFromLeaf;
+      const Vec3 centre = attach + world * Vec3(0.0f, s.leafPetiole + 0.5f * t.leafSize, 0.0f);
+      const std::optional<env::SurfacePoint> under = env.closestPoint(centre, s.adhesionDistance, &*near);
+      if (under && under->obstacle == near->obstacle && under->away.dot(near->away) > kCos45 &&
+          under->away.dot(near->away) < 1.0f - 1e-6f)
+        b.nodeFromLeaf = (node.orientation.conjugate() * laidOn(world, under->away)).normalized();
+    }
     b.shape = static_cast<uint16_t>(lr.below(uint32_t(s.leafShapes.size())));
     b.aspect = s.leafShapes[b.shape].aspect;
     b.frame = (node.orientation * b.nodeFromLeaf).toRotationMatrix();
@@ -385,9 +403,10 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
     if (r.probability < 1.0f && !rng(kPurposeRule + ri).bernoulli(r.probability)) continue;
     switch (r.kind) {
       case RuleKind::Tropism: {
-        // Eq. 6 (not climbing) and eq. 7 (climbing: adhesion replaces gravity).
+        // Eq. 6 (not climbing) and eq. 7 (climbing: adhesion toward the support and the upward
+        // pseudo-tropism v_up replace gravity).
         Vec3 v = Vec3::Zero();
-        if (climbing) v += s.adhesion * (-support->away);
+        if (climbing) v += s.adhesion * (-support->away) + s.up * Vec3(0, 1, 0);
         else v += s.gravity * Vec3(0, -1, 0);
         if (s.light > 0.0f) {
           env::LightSample l = env.light(t.position);

@@ -74,6 +74,7 @@ const schema::Schema<ClimbSpecies>& climbTropismsSchema() {
                             "a random direction per segment"),
           schema::number<S>("adhesion", &S::adhesion, d.adhesion, 0.0, 3.0, "", "adhesion",
                             "toward the nearest surface, when climbing"),
+          schema::number<S>("up", &S::up, d.up, 0.0, 3.0, "", "up", "upward, when climbing"),
           schema::direction<S>("direction", &S::userDirection, d.userDirection, "direction",
                                "a user direction (pseudo-tropism)"),
           schema::number<S>("direction_strength", &S::userDirectionStrength, d.userDirectionStrength, 0.0, 3.0, "",

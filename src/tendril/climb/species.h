@@ -52,6 +52,11 @@ struct ClimbSpecies {
   float lightAmbient = 0.3f;     // fraction of the light pull kept in full shade (sky light)
   float randomness = 0.16f;      // random direction per segment
   float adhesion = 0.35f;        // toward the nearest surface, only when climbing
+  // Eq. 7's upward pseudo-tropism v_up, only when climbing: a tip near a support "ceases to be
+  // affected by gravity and instead starts to grow upwards, clinging to the nearest object"
+  // (seed 003 §3.6). The ivy's value makes it climb a wall in shade as well as in the sun and
+  // still spread sideways (docs/species.md gives the figures).
+  float up = 0.03f;
   Vec3 userDirection = Vec3::UnitY();
   float userDirectionStrength = 0.0f;  // pseudo-tropism toward a user direction
   float windStrength = 0.0f;           // pseudo-tropism along the wind (per m/s)
