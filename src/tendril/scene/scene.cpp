@@ -127,6 +127,8 @@ wind::SphSettings readSph(JsonObject& o, bool* fill) {
                  ? wind::SphSolver::PositionBased
                  : wind::SphSolver::WeaklyCompressible;
   s.iterations = int(o.integer("iterations", s.iterations, 1, 50));
+  s.kernel = o.choice("kernel", "anisotropic", {"anisotropic", "isotropic"}) == "isotropic" ? wind::SphKernel::Isotropic
+                                                                                             : wind::SphKernel::Anisotropic;
   // "boundary": one kind for every face, or an object naming faces ("-x" … "+z"; the others
   // outflow).
   auto kind = [](const std::string& k) { return k == "closed" ? wind::SphBoundary::Closed : wind::SphBoundary::Outflow; };

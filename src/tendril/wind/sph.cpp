@@ -198,6 +198,8 @@ void SphAir::validate() const {
   checkRange("dragCoefficient", s.dragCoefficient, 0.0f, 10.0f, "");
   checkRange("dt", s.dt, 1e-6f, 1.0f, "s");
   checkRange("cfl", s.cfl, 0.01f, 1.0f, "");
+  if (s.kernel != SphKernel::Anisotropic && s.kernel != SphKernel::Isotropic)
+    throw settingError("kernel", fmt::format("must be Anisotropic or Isotropic, got {}", int(s.kernel)));
   if (s.iterations < 1 || s.iterations > 50)
     throw settingError("iterations", fmt::format("must be in [1, 50], got {}", s.iterations));
   if (s.maxSubsteps < 1 || s.maxSubsteps > 100000)

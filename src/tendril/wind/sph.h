@@ -49,6 +49,18 @@ enum class SphSolver {
   PositionBased,
 };
 
+// The kernel through which a plant's body meets the air (docs/sph.md, "Coupling with the plants").
+enum class SphKernel {
+  // Seed 000 eq. 13: W(G(x − x_j)), G mapping the body's own ellipsoid grown by h along every
+  // axis onto the unit ball (support semi-axes a + h along the body, b + h across it).
+  Anisotropic,
+  // An ablation for comparing with eq. 13: the support a sphere of radius ∛(a b²) + h — the
+  // body taken as a ball of its own volume, as isotropic solid particles are in a unified
+  // solver (Macklin et al. 2014). Only the kernel changes; the drag stays a stem's cross-flow
+  // drag. A long particle then meets the air only around its centre.
+  Isotropic,
+};
+
 enum class SphBoundary {
   Outflow,  // particles leaving the domain box are removed
   Closed,   // the domain box's faces are walls
@@ -62,6 +74,7 @@ struct SphSettings {
   float backgroundPressure = 0.05f;  // p_b / (c²ρ0), closed domains only: air down to this deficit still pulls
   float viscosity = 0.02f;        // μ (Pa·s), artificial (air's own is 1.8e-5; see docs/sph.md)
   float dragCoefficient = 1.2f;   // C_d of a branch particle in cross-flow (a cylinder)
+  SphKernel kernel = SphKernel::Anisotropic;  // plant bodies' kernel: eq. 13's, or isotropic (an ablation)
   float dt = 0.025f;              // frame step (s); use the plant world's step
   float cfl = 0.4f;               // substeps keep Δt ≤ cfl · h / (c + v_max) (PositionBased: cfl · h / v_max)
   int maxSubsteps = 64;           // per frame; more would be needed → the frame is clamped, warned once

@@ -52,8 +52,10 @@ void SphAir::collectPlants(std::span<const models::AirBodies> bodies) {
     const models::AirBodies& B = bodies[foundBody[k]];
     const float a = B.halfLength[i], b = B.radius[i];
     // eq. 13: G maps the particle's support ellipsoid — its own ellipsoid grown by the air's
-    // support h along every axis — onto the unit ball: G = R diag(1/α, 1/β, 1/β) Rᵀ.
-    const float alpha = a + h_, beta = b + h_;
+    // support h along every axis — onto the unit ball: G = R diag(1/α, 1/β, 1/β) Rᵀ. The
+    // isotropic ablation: a ball of the particle's volume grown by h, α = β = ∛(a b²) + h.
+    float alpha = a + h_, beta = b + h_;
+    if (settings_.kernel == SphKernel::Isotropic) alpha = beta = std::cbrt(a * b * b) + h_;
     P.slot[j] = i;
     P.body[j] = foundBody[k];
     P.x[j] = B.position[i];
