@@ -1,6 +1,6 @@
 // One simulation step of the oriented-particle plants (seed 000): growth + dynamics +
-// collisions + integration, no rendering, for 1k to 200k particles in grown plants, with the
-// per-phase breakdown of the paper's Table 1. Results and the command: bench/README.md.
+// collisions + integration, no rendering, for 1k to 200k particles in grown plants, and for
+// 25k and 100k in plants still growing, with the per-phase breakdown of the paper's Table 1. Results and the command: bench/README.md.
 #include "tendril/core/timer.h"
 #include "tendril/env/environment.h"
 #include "tendril/env/primitives.h"
@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <map>
+#include <tuple>
 #include <memory>
 #include <vector>
 
@@ -34,9 +35,11 @@ struct Grown {
   double growSeconds = 0;
 };
 
-Grown& grown(size_t target, int plants) {
-  static std::map<std::pair<size_t, int>, Grown> cache;
-  Grown& g = cache[{target, plants}];
+// `growing`: stop at 80 % of the particles instead, without settling, so that the plants are
+// still growing fast when the steps are timed (BM_ParticleGrowStep).
+Grown& grown(size_t target, int plants, bool growing = false) {
+  static std::map<std::tuple<size_t, int, bool>, Grown> cache;
+  Grown& g = cache[{target, plants, growing}];
   if (g.world) return g;
   Timer t;
   const float width = 1.5f * float(plants) + 1.0f;
@@ -63,13 +66,15 @@ Grown& grown(size_t target, int plants) {
     g.world->addPlant("ivy" + std::to_string(k), s, Vec3(1.5f * (k - 0.5f * (plants - 1)), 0.03f, 0.11f),
                       Vec3(0, 1, 0), uint64_t(k + 1), *g.env);
   size_t last = 0;
-  for (int step = 0, still = 0; step < 6000 && g.world->particleCount() < target * 97 / 100 && still < 100; ++step) {
+  const size_t stop = growing ? target * 80 / 100 : target * 97 / 100;
+  for (int step = 0, still = 0; step < 6000 && g.world->particleCount() < stop && still < 100; ++step) {
     g.world->step(*g.env);
     still = g.world->particleCount() == last ? still + 1 : 0;
     last = g.world->particleCount();
   }
   // Let the last particles finish growing and the plants settle.
-  for (int step = 0; step < 100; ++step) g.world->step(*g.env);
+  if (!growing)
+    for (int step = 0; step < 100; ++step) g.world->step(*g.env);
   g.growSeconds = t.seconds();
   return g;
 }
@@ -104,6 +109,51 @@ void BM_ParticleStep(benchmark::State& state) {
   state.counters["integrate_ms"] = medianMs(integrate);
   state.counters["setup_s"] = g.growSeconds;
 }
+// Seed 000's Table 1 times steps of plants that are growing: here the plants are grown to 80 %
+// of N (untimed), and the 50 timed steps go on growing them (`grown`: particles added in the
+// timed steps; `growth_share`: growth's part of the step, in %).
+void BM_ParticleGrowStep(benchmark::State& state) {
+  Grown& g = grown(size_t(state.range(0)), int(state.range(1)), true);
+  particles::ParticleWorld& w = *g.world;
+  const size_t before = w.particleCount();
+  std::vector<double> total, growth, dynamics, collisions, integrate, share;
+  CALLGRIND_START_INSTRUMENTATION;
+  for (auto _ : state) {
+    Timer t;
+    CALLGRIND_TOGGLE_COLLECT;
+    w.step(*g.env);
+    CALLGRIND_TOGGLE_COLLECT;
+    const double seconds = t.seconds();
+    state.SetIterationTime(seconds);
+    total.push_back(seconds);
+    growth.push_back(w.timings().growth);
+    dynamics.push_back(w.timings().dynamics);
+    collisions.push_back(w.timings().collisions);
+    integrate.push_back(w.timings().breaking);
+    share.push_back(w.timings().growth / seconds);
+  }
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  state.counters["particles"] = double(w.particleCount());
+  state.counters["grown"] = double(w.particleCount() - before);
+  state.counters["median_ms"] = median(total) * 1e3;
+  state.counters["growth_ms"] = median(growth) * 1e3;
+  state.counters["growth_share"] = median(share) * 100.0;
+  state.counters["dynamics_ms"] = median(dynamics) * 1e3;
+  state.counters["collisions_ms"] = median(collisions) * 1e3;
+  state.counters["integrate_ms"] = median(integrate) * 1e3;
+  state.counters["setup_s"] = g.growSeconds;
+}
+BENCHMARK(BM_ParticleGrowStep)
+    ->Args({25000, 20})
+    ->Args({100000, 80})
+    ->ArgNames({"particles", "plants"})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(50);
+
 BENCHMARK(BM_ParticleStep)
     ->Args({1000, 1})
     ->Args({5000, 4})
