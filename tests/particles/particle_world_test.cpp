@@ -379,25 +379,28 @@ TEST(ParticleDynamics, NoNanAfterAThousandViolentDragsAtLargeSteps) {
     }
 }
 
+// Two ivies on a wall, of at most `maxParticles` each, grown `steps` steps with a drag from the
+// last quarter on: the hash of their snapshots.
+uint64_t twoDraggedIvies(const env::Environment& env, uint64_t seed, int maxParticles, int steps) {
+  WorldSettings ws;
+  ws.seed = seed;
+  ParticleWorld w(ws);
+  ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
+  s.maxParticles = maxParticles;
+  w.addPlant("a", s, Vec3(-0.5f, 0.03f, 0.11f), Vec3(0, 1, 0), 1, env);
+  w.addPlant("b", s, Vec3(0.5f, 0.03f, 0.11f), Vec3(0, 1, 0), 2, env);
+  for (int k = 0; k < steps; ++k) {
+    if (k == steps * 3 / 4) w.setDrag(uint32_t(w.capacity() / 2), Vec3(0, 2, 1), 0.8f);
+    w.step(env);
+  }
+  EXPECT_GT(w.particleCount(), size_t(maxParticles * 2 / 3));
+  return plant::contentHash(std::vector{w.snapshot(0), w.snapshot(1)});
+}
+
 TEST(ParticleDynamics, SameSeedSameSnapshotForAnyThreadCount) {
   auto env = makeEnv(kGroundAndWall);
-  auto run = [&](uint64_t seed) {
-    WorldSettings ws;
-    ws.seed = seed;
-    ParticleWorld w(ws);
-    ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
-    s.maxParticles = 1500;
-    w.addPlant("a", s, Vec3(-0.5f, 0.03f, 0.11f), Vec3(0, 1, 0), 1, *env);
-    w.addPlant("b", s, Vec3(0.5f, 0.03f, 0.11f), Vec3(0, 1, 0), 2, *env);
-    for (int k = 0; k < 400; ++k) {
-      if (k == 300) w.setDrag(uint32_t(w.capacity() / 2), Vec3(0, 2, 1), 0.8f);
-      w.step(*env);
-    }
-    EXPECT_GT(w.particleCount(), 1000u);
-    return plant::contentHash(std::vector{w.snapshot(0), w.snapshot(1)});
-  };
-  const uint64_t one = tendril::test::sameAtEveryThreadCount([&] { return run(1); });
-  EXPECT_NE(one, run(2));
+  const uint64_t one = tendril::test::sameAtEveryThreadCount([&] { return twoDraggedIvies(*env, 1, 1500, 400); });
+  EXPECT_NE(one, twoDraggedIvies(*env, 2, 1500, 400));
 }
 
 // The shape-matching passes' AVX2 version and the baseline one do the same operations in the
@@ -405,23 +408,10 @@ TEST(ParticleDynamics, SameSeedSameSnapshotForAnyThreadCount) {
 TEST(ParticleDynamics, Avx2AndBaselineShapeMatchingGiveTheSameBits) {
   if (!avx2ShapeMatching()) GTEST_SKIP() << "this CPU runs only the baseline passes";
   auto env = makeEnv(kGroundAndWall);
-  auto run = [&] {
-    ParticleWorld w(WorldSettings{});
-    ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
-    s.maxParticles = 1200;
-    w.addPlant("a", s, Vec3(-0.5f, 0.03f, 0.11f), Vec3(0, 1, 0), 1, *env);
-    w.addPlant("b", s, Vec3(0.5f, 0.03f, 0.11f), Vec3(0, 1, 0), 2, *env);
-    for (int k = 0; k < 300; ++k) {
-      if (k == 200) w.setDrag(uint32_t(w.capacity() / 2), Vec3(0, 2, 1), 0.8f);
-      w.step(*env);
-    }
-    EXPECT_GT(w.particleCount(), 800u);
-    return plant::contentHash(std::vector{w.snapshot(0), w.snapshot(1)});
-  };
-  const uint64_t avx2 = run();
+  const uint64_t avx2 = twoDraggedIvies(*env, 1, 1200, 300);
   forceBaselineShapeMatching(true);
   EXPECT_FALSE(avx2ShapeMatching());
-  const uint64_t baseline = run();
+  const uint64_t baseline = twoDraggedIvies(*env, 1, 1200, 300);
   forceBaselineShapeMatching(false);
   EXPECT_EQ(avx2, baseline);
 }

@@ -6,6 +6,7 @@
 // Also: the setting is read from a scene and checked, and the ablation's results do not depend
 // on the thread count.
 #include "support/determinism.h"
+#include "support/sph_stream.h"
 #include "support/test_paths.h"
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
@@ -89,30 +90,9 @@ Stream stream(SphKernel kernel, SphSolver solver = SphSolver::PositionBased) {
   return t;
 }
 
-SphAir streamingAir(const Stream& t, float speed) {
-  SphAir air(t.settings);
-  air.fillBox(t.settings.domainMin, t.settings.domainMax, *t.env, Vec3(speed, 0, 0));
-  SphEmitter e;
-  e.position = Vec3(t.settings.domainMin.x() + 0.02f, 0.4f, 0.0f);
-  e.direction = Vec3(1, 0, 0);
-  e.speed = speed;
-  e.radius = 0.9f;
-  air.addEmitter(e);
-  return air;
-}
+SphAir streamingAir(const Stream& t, float speed) { return test::streamingAir(t.settings, *t.env, speed, 0.9f); }
 
-// Mean downwind air speed over a box of 5 × 5 × 5 sample points.
-float meanSpeedX(const SphAir& air, const Vec3& lo, const Vec3& hi) {
-  double sum = 0.0;
-  int n = 0;
-  for (int i = 0; i <= 4; ++i)
-    for (int j = 0; j <= 4; ++j)
-      for (int k = 0; k <= 4; ++k) {
-        sum += air.velocityAt(lo + (hi - lo).cwiseProduct(Vec3(float(i), float(j), float(k)) / 4.0f)).x();
-        ++n;
-      }
-  return float(sum / n);
-}
+using test::meanSpeedX;
 
 struct Lee {
   double middle = 0, joint = 0;  // the air's slowdown behind the rods' middles and behind their joint

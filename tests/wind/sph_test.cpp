@@ -3,6 +3,7 @@
 // bends downwind and slows the air behind it, results do not depend on the thread count, the
 // neighbour search finds what a brute-force search finds, and bad settings are refused.
 #include "support/determinism.h"
+#include "support/sph_stream.h"
 #include "support/test_paths.h"
 #include "tendril/core/error.h"
 #include "tendril/core/hash.h"
@@ -275,19 +276,7 @@ float meanTopX(const particles::ParticleWorld& w) {
   return sum / float(topX.size());
 }
 
-// Mean downwind air speed over a box of sample points.
-float meanSpeedX(const SphAir& air, const Vec3& lo, const Vec3& hi) {
-  double sum = 0.0;
-  int n = 0;
-  for (int i = 0; i <= 4; ++i)
-    for (int j = 0; j <= 4; ++j)
-      for (int k = 0; k <= 4; ++k) {
-        const Vec3 p = lo + (hi - lo).cwiseProduct(Vec3(float(i), float(j), float(k)) / 4.0f);
-        sum += air.velocityAt(p).x();
-        ++n;
-      }
-  return float(sum / n);
-}
+using test::meanSpeedX;
 
 struct Tunnel {
   std::unique_ptr<env::Environment> env;
@@ -306,17 +295,7 @@ Tunnel windTunnel(SphSolver solver = SphSolver::WeaklyCompressible) {
   return t;
 }
 
-SphAir streamingAir(const Tunnel& t, float speed) {
-  SphAir air(t.settings);
-  air.fillBox(t.settings.domainMin, t.settings.domainMax, *t.env, Vec3(speed, 0, 0));
-  SphEmitter e;
-  e.position = Vec3(t.settings.domainMin.x() + 0.02f, 0.4f, 0.0f);
-  e.direction = Vec3(1, 0, 0);
-  e.speed = speed;
-  e.radius = 0.75f;
-  air.addEmitter(e);
-  return air;
-}
+SphAir streamingAir(const Tunnel& t, float speed) { return test::streamingAir(t.settings, *t.env, speed, 0.75f); }
 
 TEST_P(SphSolvers, APlantInAStreamBendsDownwindAndSlowsTheAirInItsLee) {
   const Tunnel tunnel = windTunnel(GetParam());
