@@ -243,7 +243,7 @@ void ClimbSystem::placeLeaves(const ClimbSpecies& s, const Tip& t, const Vec3& d
       const Quat world = node.orientation * b.nodeFromLeaf;
       const Vec3 centre = attach + world * Vec3(0.0f, s.leafPetiole + 0.5f * t.leafSize, 0.0f);
       const std::optional<env::SurfacePoint> under = env.closestPoint(centre, s.adhesionDistance, &*near);
-      if (under && under->obstacle == near->obstacle && under->away.dot(near->away) > kCos45 &&
+      if (under && env::sameSupport(*under, *near, env) && under->away.dot(near->away) > kCos45 &&
           under->away.dot(near->away) < 1.0f - 1e-6f)
         b.nodeFromLeaf = (node.orientation.conjugate() * laidOn(world, under->away)).normalized();
     }

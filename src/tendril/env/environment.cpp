@@ -3,6 +3,7 @@
 #include "tendril/core/error.h"
 #include "tendril/core/log.h"
 #include "tendril/env/sdf.h"
+#include "tendril/env/stem_layer.h"
 #include "tendril/env/topology.h"
 
 #include <embree3/rtcore.h>
@@ -18,9 +19,15 @@
 
 namespace tendril::env {
 
+RTCDevice environmentDevice();
+
 namespace {
 
-RTCDevice embreeDevice() {
+RTCDevice embreeDevice() { return environmentDevice(); }
+
+}  // namespace
+
+RTCDevice environmentDevice() {
   static RTCDevice device = [] {
     RTCDevice d = rtcNewDevice(nullptr);
     if (!d) throw Error("Embree", "", "cannot create the ray tracing device");
@@ -31,6 +38,8 @@ RTCDevice embreeDevice() {
   }();
   return device;
 }
+
+namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
@@ -370,6 +379,7 @@ void Environment::commit() {
     }
   }
   rtcCommitScene(scene);
+  commitStems();
 
   // A scene of a few triangles in all (walls, boxes, planes): closest-point queries test each
   // triangle's box themselves, which is several times cheaper than a traversal and its callbacks.
@@ -414,7 +424,18 @@ void Environment::commit() {
 
 std::optional<RayHit> Environment::rayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
-  if (obstacles_.empty() || !rayAccepted(origin, dir, tMin, tMax)) return std::nullopt;
+  if (!rayAccepted(origin, dir, tMin, tMax)) return std::nullopt;
+  std::optional<RayHit> hit;
+  if (!obstacles_.empty()) hit = obstacleRayCast(origin, dir, tMax, tMin);
+  if (!stemLayers_.empty()) {
+    RayHit stemHit;
+    float t = hit ? hit->t : tMax;
+    if (stemRayCast(origin, dir, tMin, &stemHit, &t)) hit = stemHit;
+  }
+  return hit;
+}
+
+std::optional<RayHit> Environment::obstacleRayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -446,7 +467,9 @@ std::optional<RayHit> Environment::rayCast(const Vec3& origin, const Vec3& dir, 
 
 bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
-  if (obstacles_.empty() || !rayAccepted(origin, dir, tMin, tMax)) return false;
+  if (!rayAccepted(origin, dir, tMin, tMax)) return false;
+  if (!stemLayers_.empty() && stemOccluded(origin, dir, tMin, tMax, false)) return true;
+  if (obstacles_.empty()) return false;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay ray;
@@ -468,7 +491,7 @@ bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, floa
 
 bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
-  if (obstacles_.empty()) return false;
+  if (obstacles_.empty() && stemLayers_.empty()) return false;
   // One occlusion ray per segment, stopping at the first blocked one. On the climbing bench a
   // single ray along a leaf edge costs 420-470 instructions in Embree, a lane of an 8-wide
   // packet (rtcOccluded8) 620-710: the segments of one leaf point in too many directions for
@@ -494,8 +517,11 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
     ray.dir_z = d.z();
     ray.tnear = 0.0f;
     ray.tfar = len;
-    rtcOccluded1(static_cast<RTCScene>(scene_), &ctx, &ray);
-    if (ray.tfar < 0.0f) return true;  // Embree sets tfar = -inf on a hit
+    if (!obstacles_.empty()) {
+      rtcOccluded1(static_cast<RTCScene>(scene_), &ctx, &ray);
+      if (ray.tfar < 0.0f) return true;  // Embree sets tfar = -inf on a hit
+    }
+    if (!stemLayers_.empty() && stemOccluded(from[i], d, 0.0f, len, false)) return true;
   }
   return false;
 }
@@ -532,7 +558,17 @@ std::optional<SurfacePoint> Environment::closestPointFacing(const Vec3& p, float
 std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, const Vec3* direction,
                                                  float cosLimit, const SurfacePoint* hint) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
-  if (obstacles_.empty()) return std::nullopt;
+  std::optional<SurfacePoint> best;
+  if (!obstacles_.empty()) best = closestObstacle(p, radius, direction, cosLimit, hint);
+  if (!stemLayers_.empty()) {
+    SurfacePoint sp;
+    if (closestStem(p, best ? best->distance : radius, direction, cosLimit, &sp)) best = sp;
+  }
+  return best;
+}
+
+std::optional<SurfacePoint> Environment::closestObstacle(const Vec3& p, float radius, const Vec3* direction,
+                                                         float cosLimit, const SurfacePoint* hint) const {
   // Geometry ids equal obstacle indices, so small per-call tables suffice.
   constexpr size_t kStack = 16;
   const Vec3* vStack[kStack];
@@ -614,7 +650,14 @@ std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, co
 }
 
 float Environment::exactSignedDistance(const Vec3& p, float maxDistance) const {
-  std::optional<SurfacePoint> sp = closestPoint(p, maxDistance);
+  float d = obstacles_.empty() ? maxDistance : exactObstacleDistance(p, maxDistance);
+  float stemDistance;
+  if (!stemLayers_.empty() && closestStem(p, d, nullptr, 1.0f, nullptr, &stemDistance)) d = stemDistance;
+  return d;
+}
+
+float Environment::exactObstacleDistance(const Vec3& p, float maxDistance) const {
+  std::optional<SurfacePoint> sp = closestObstacle(p, maxDistance, nullptr, 1.0f, nullptr);
   if (!sp) return maxDistance;
   const ObstacleData& o = *obstacles_[sp->obstacle];
   if (!o.info.closed || sp->distance == 0.0f) return sp->distance;
@@ -690,12 +733,27 @@ void Environment::buildDistanceFields() const {
 float Environment::signedDistance(const Vec3& p) const { return signedDistance(p, nullptr); }
 
 float Environment::signedDistance(const Vec3& p, Vec3* gradient) const {
+  // The obstacles' grids, then the stems seen nearer than they are (exactly: a tube's distance
+  // is cheap to compute).
+  const size_t n = obstacles_.size();
+  if (gradient) *gradient = Vec3::Zero();
+  float best = n == 0 ? kInf : obstacleSignedDistance(p, gradient);
+  if (!stemLayers_.empty()) {
+    SurfacePoint sp;
+    float d;
+    if (closestStem(p, best, nullptr, 1.0f, &sp, &d)) {
+      best = d;
+      if (gradient) *gradient = sp.normal;
+    }
+  }
+  return best;
+}
+
+float Environment::obstacleSignedDistance(const Vec3& p, Vec3* gradient) const {
   // The minimum over the obstacles whose bounds are no farther than the best distance so far.
   // The obstacle nearest by its bounds is sampled first: a point on a wall then skips the
   // ground and everything else (most collision queries are such points).
   const size_t n = obstacles_.size();
-  if (gradient) *gradient = Vec3::Zero();
-  if (n == 0) return kInf;
   constexpr size_t kKept = 16;  // bound distances kept for the second loop
   float kept[kKept];
   auto boundsDistance2 = [&](size_t k) {
@@ -763,7 +821,8 @@ LightSample Environment::light(const Vec3& p) const {
     int unblocked = 0;
     for (int i = 0; i < n; ++i) {
       Vec3 d = coneSample(toLight, l.angularRadius, i, n);
-      if (!occluded(p, d, tMax, 1e-4f)) ++unblocked;
+      if (!occluded(p, d, tMax, 1e-4f) && (stemLayers_.empty() || !stemOccluded(p, d, 1e-4f, tMax, true)))
+        ++unblocked;
     }
     float v = float(unblocked) / float(n);
     total += l.intensity;

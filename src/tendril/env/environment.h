@@ -7,6 +7,12 @@
 // on one Embree BVH over all obstacles in world space; signed distances come from a per-
 // obstacle grid in local space (built on first use), so moving an obstacle never rebuilds it.
 //
+// Plants can be supports too: a host plant's stem segments, given as tubes (setStems), answer
+// the same queries as obstacles — ray casts, closest point, signed distance, occlusion — and its
+// leaves shade the light. Stems belong to an owner (the model system of the host plant); the
+// queries see every owner's stems but the viewer's (setStemViewer), since plants of one model
+// already meet inside their own system.
+//
 // Queries are const and thread-safe after commit(); edits and commit() are not.
 #pragma once
 
@@ -56,12 +62,20 @@ struct ObstacleInfo {
 
 inline constexpr size_t kConvexCheckTriangles = 2048;
 
+// What a hit or a closest point lies on: obstacle `obstacle` (its triangle `triangle`), or,
+// when obstacle == kOnStem, the plant stem whose index is in `triangle` (Environment::stem).
+// (The layout stays that of an obstacle answer: the climbing model saves answers as they are.)
+inline constexpr uint32_t kOnStem = 0xffffffffu;
+inline constexpr uint32_t kNoStem = 0xffffffffu;
+
 struct RayHit {
   float t = 0.0f;
   Vec3 point = Vec3::Zero();
-  Vec3 normal = Vec3::Zero();  // unit face normal (outward for closed obstacles)
+  Vec3 normal = Vec3::Zero();  // unit face normal (outward for closed obstacles and stems)
   uint32_t obstacle = 0;
   uint32_t triangle = 0;
+  bool onStem() const { return obstacle == kOnStem; }
+  uint32_t stem() const { return onStem() ? triangle : kNoStem; }
 };
 
 struct SurfacePoint {
@@ -71,7 +85,32 @@ struct SurfacePoint {
   float distance = 0.0f;
   uint32_t obstacle = 0;
   uint32_t triangle = 0;
+  bool onStem() const { return obstacle == kOnStem; }
+  uint32_t stem() const { return onStem() ? triangle : kNoStem; }
 };
+
+// One stem segment of a host plant as a support: a round cone (the convex hull of a ball of
+// radius ra at a and one of radius rb at b). `plant` and `node` say where it is on its host.
+struct StemTube {
+  Vec3 a = Vec3::Zero(), b = Vec3::Zero();
+  float ra = 0.0f, rb = 0.0f;
+  uint32_t plant = 0;  // the host plant (the Session's plant index)
+  uint32_t node = 0;   // the host node whose segment this is
+};
+
+// A leaf of a host plant as a shade: a triangle that blocks light and nothing else.
+struct ShadeTriangle {
+  Vec3 a, b, c;
+};
+
+// Closest point of a round cone's surface to p: the point, the unit outward normal there and
+// the signed distance (negative inside).
+struct TubePoint {
+  Vec3 point;
+  Vec3 normal;
+  float distance;
+};
+TubePoint closestOnTube(const StemTube& t, const Vec3& p);
 
 struct Light {
   enum class Type { Directional, Point };
@@ -134,6 +173,28 @@ class Environment {
   void setAirFlow(const AirFlow* air) { wind_.setAirFlow(air); }
   const WindField& windField() const { return wind_; }
 
+  // --- plants as supports ---
+  // Replaces the stems and leaf shade of `owner` (any number; the Session uses its model
+  // systems' indices). Takes effect at the next commit(). Tubes with a non-finite end or radius,
+  // a negative radius, or both radii zero are dropped.
+  void setStems(uint32_t owner, std::vector<StemTube> tubes, std::vector<ShadeTriangle> shade = {});
+  void clearStems();
+  // Queries see the stems and shade of every owner but `viewer` (kEveryStem: all of them,
+  // kNoStems: none). Cheap; not thread-safe with queries.
+  static constexpr uint32_t kEveryStem = 0xffffffffu;
+  static constexpr uint32_t kNoStems = 0xfffffffeu;
+  void setStemViewer(uint32_t viewer) { stemViewer_ = viewer; }
+  uint32_t stemViewer() const { return stemViewer_; }
+  // Whether the queries see any stem or shade now (caches of obstacle distances must then also
+  // key on stemRevision(), which changes whenever any owner's stems are replaced).
+  bool seesStems() const;
+  uint64_t stemRevision() const { return stemRevision_; }
+  // Every stem of every owner, numbered across owners in owner order; SurfacePoint::stem and
+  // RayHit::stem index this.
+  size_t stemCount() const { return stemIndex_.size(); }
+  const StemTube& stem(uint32_t index) const;
+  uint32_t stemOwner(uint32_t index) const;
+
   // Rebuilds the BVH (and stroke lookup) after edits. Cheap when nothing changed.
   void commit();
 
@@ -183,10 +244,31 @@ class Environment {
   static float walkTowardClosest(const ObstacleData& o, const Vec3& p, uint32_t start);
   std::optional<SurfacePoint> closest(const Vec3& p, float radius, const Vec3* direction, float cosLimit,
                                       const SurfacePoint* hint = nullptr) const;
+  // The same queries over the obstacles alone.
+  std::optional<SurfacePoint> closestObstacle(const Vec3& p, float radius, const Vec3* direction, float cosLimit,
+                                              const SurfacePoint* hint) const;
+  std::optional<RayHit> obstacleRayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const;
+  float exactObstacleDistance(const Vec3& p, float maxDistance) const;
+  float obstacleSignedDistance(const Vec3& p, Vec3* gradient) const;
   // o's distance grid, built on first use (thread-safe).
   const SdfGrid& distanceField(const ObstacleData& o) const;
 
   std::vector<std::unique_ptr<ObstacleData>> obstacles_;
+  struct StemLayer;
+  std::vector<std::unique_ptr<StemLayer>> stemLayers_;  // by owner order
+  std::vector<std::pair<uint32_t, uint32_t>> stemIndex_;  // global stem index → (layer, tube)
+  uint32_t stemViewer_ = kEveryStem;
+  uint64_t stemRevision_ = 0;
+  bool seesLayer(const StemLayer& layer) const;
+  void commitStems();
+  // The stem surface nearest p with sign (inside a tube counts as nearer than any outside
+  // surface) if its signed distance is below `radius`: into `best` and `signedDistance`.
+  bool closestStem(const Vec3& p, float radius, const Vec3* direction, float cosLimit, SurfacePoint* best,
+                   float* signedDistance = nullptr) const;
+  // The first stem hit closer than *tMax (then lowered to it), into `hit`.
+  bool stemRayCast(const Vec3& origin, const Vec3& dir, float tMin, RayHit* hit, float* tMax) const;
+  // Whether a seen stem (or, with `shade`, a seen leaf) blocks the ray.
+  bool stemOccluded(const Vec3& origin, const Vec3& dir, float tMin, float tMax, bool shade) const;
   // With at most kSmallSceneTriangles triangles in all, every triangle's world box (by obstacle,
   // then triangle): closest-point queries test them in turn instead of traversing Embree's BVH.
   // The boxes are kept coordinate by coordinate, so the distances to all of them are found
@@ -208,5 +290,8 @@ class Environment {
 };
 
 const char* obstacleKindName(ObstacleKind kind);
+
+// Whether two answers lie on the same support: the same obstacle, or the same host plant.
+bool sameSupport(const SurfacePoint& a, const SurfacePoint& b, const Environment& env);
 
 }  // namespace tendril::env

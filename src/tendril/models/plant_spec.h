@@ -22,6 +22,7 @@ struct PlantSpec {
   Vec3 position = Vec3::Zero();   // seed point (m)
   Vec3 direction = Vec3::UnitY(); // initial growth direction
   uint64_t seed = 1;              // the plant's own random seed
+  bool support = false;           // its stems hold climbing plants of other models, its leaves shade them
   std::shared_ptr<const ModelParams> params;
 
   // The settings as the model's own type (nullptr if they are of another model).

@@ -46,7 +46,7 @@ Vec3 clearance(const env::Environment& env, const Vec3& p, const Ring* rings, si
     // inside does it take the exact sign (angle-weighted pseudonormal).
     const bool inside = s->away.dot(s->normal) < 0.5f && env.exactSignedDistance(q, reach) < 0.0f;
     // The plane through the closest point of a convex obstacle, facing a point outside it.
-    if (plane && pass == 0 && !inside && s->distance > 0.0f && env.obstacle(s->obstacle).convex)
+    if (plane && pass == 0 && !inside && s->distance > 0.0f && !s->onStem() && env.obstacle(s->obstacle).convex)
       *plane = {s->obstacle, s->point, s->away};
     const Vec3 n = inside ? s->normal : s->away;
     const float d = inside ? -s->distance : s->distance;
@@ -65,7 +65,8 @@ struct ObstacleBoxes {
   static constexpr size_t kMax = 8;  // scenes of more obstacles are not tried
   size_t count = 0;
   Bounds3 box[kMax];
-  explicit ObstacleBoxes(const env::Environment& env) : count(env.obstacleCount()) {
+  // Stems are not boxed: a plant among other plants' stems is not tried either.
+  explicit ObstacleBoxes(const env::Environment& env) : count(env.seesStems() ? kMax + 1 : env.obstacleCount()) {
     if (count <= kMax)
       for (uint32_t o = 0; o < count; ++o) box[o] = env.obstacle(o).worldBounds;
   }

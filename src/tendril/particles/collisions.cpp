@@ -49,9 +49,12 @@ void closestSegmentPoints(const Vec3& p1, const Vec3& q1, const Vec3& p2, const 
 void ParticleWorld::collideObstacles(const env::Environment& env) {
   const size_t n = capacity();
   correction_.assign(n, Vec3::Zero());
-  if (env.obstacleCount() == 0) return;
-  // The distances proved by earlier samples hold only for the same obstacles in the same place.
-  bool same = clearanceEnv_ == &env && clearanceObstacles_.size() == env.obstacleCount();
+  if (env.obstacleCount() == 0 && !env.seesStems()) return;
+  // The distances proved by earlier samples hold only for the same obstacles in the same place,
+  // and the same host plants' stems (plants as supports).
+  const uint64_t stems = env.seesStems() ? 2 * env.stemRevision() + 1 : 0;
+  bool same = clearanceEnv_ == &env && clearanceObstacles_.size() == env.obstacleCount() && clearanceStems_ == stems;
+  clearanceStems_ = stems;
   clearanceObstacles_.resize(env.obstacleCount());
   for (uint32_t o = 0; o < env.obstacleCount(); ++o) {
     const env::ObstacleInfo& info = env.obstacle(o);

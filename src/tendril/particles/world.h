@@ -289,6 +289,7 @@ class ParticleWorld final : public models::AirCoupling {
   std::vector<Clearance> clearance_;
   std::vector<ObstacleState> clearanceObstacles_;
   const env::Environment* clearanceEnv_ = nullptr;
+  uint64_t clearanceStems_ = 0;  // the environment's stemRevision() and whether stems were seen
   // Shape matching runs on copies of the particles in piece order: connected pieces one after
   // the other, each root first and breadth first, so that a particle's parent comes before it
   // and its children are contiguous. The order is rebuilt only when the topology changes.

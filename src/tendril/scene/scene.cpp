@@ -161,6 +161,7 @@ models::PlantSpec readPlant(JsonObject& o, const std::filesystem::path& baseDir,
   p.position = o.vec3("position", Vec3::Zero());
   p.direction = o.direction("direction", Vec3::UnitY());
   p.seed = o.seed("seed", index + 1);
+  p.support = o.boolean("support", false);
   p.params = model->read(o, baseDir);
   o.finish();
   return p;

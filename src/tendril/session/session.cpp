@@ -148,17 +148,19 @@ size_t Session::systemFor(const std::string& model) {
 }
 
 void Session::step() {
+  updateSupports();
   if (air_) {
     // The air and the plants that take the air's push act on each other (two-way coupling),
     // then the plants step.
     std::vector<models::AirCoupling*> coupled;
     for (auto& s : systems_)
       if (models::AirCoupling* a = s->airCoupling()) coupled.push_back(a);
-    air_->step(*env_, std::span<models::AirCoupling* const>(coupled));
+    // The air meets obstacles, not the plants' stems (particle plants push it themselves).
+    viewingAs(env::Environment::kNoStems, [&] { air_->step(*env_, std::span<models::AirCoupling* const>(coupled)); });
     airSeconds_ += air_->timings().total;
     ++airSteps_;
   }
-  for (auto& s : systems_) s->step(*env_);
+  for (size_t s = 0; s < systems_.size(); ++s) viewingAs(s, [&] { systems_[s]->step(*env_); });
   ++steps_;
 }
 
@@ -173,7 +175,9 @@ void Session::run(uint32_t steps, const std::function<void(uint32_t)>& onStep) {
 std::vector<Session::GrowthReport> Session::diagnoseGrowth() const {
   std::vector<GrowthReport> out;
   for (size_t i = 0; i < plants_.size(); ++i)
-    if (auto p = models::diagnoseGrowth(*systems_[plants_[i].system], plants_[i].index, specs_[i].spec, *env_))
+    if (auto p = viewingAs(plants_[i].system, [&] {
+          return models::diagnoseGrowth(*systems_[plants_[i].system], plants_[i].index, specs_[i].spec, *env_);
+        }))
       out.push_back({i, std::move(*p)});
   return out;
 }
@@ -204,9 +208,17 @@ std::vector<plant::PlantModel> Session::plants() const {
   // Their bark is cleared at the rings the scene's meshes sweep.
   const int subdivisions = scene_.output.subdivisions;
   // Plants of very unequal size: the largest first (each also shares out its own work).
-  std::vector<size_t> size(out.size());
-  for (size_t i = 0; i < out.size(); ++i) size[i] = out[i].nodeCount() + out[i].leafCount();
-  parallelForLargestFirst(size, [&](size_t i) { models::keepStemsOutside(out[i], *env_, subdivisions); });
+  // Each system's plants clear the stems of other systems' support plants too.
+  for (size_t s = 0; s < systems_.size(); ++s) {
+    std::vector<size_t> mine;
+    for (size_t i = 0; i < out.size(); ++i)
+      if (plants_[i].system == s) mine.push_back(i);
+    std::vector<size_t> size(mine.size());
+    for (size_t k = 0; k < mine.size(); ++k) size[k] = out[mine[k]].nodeCount() + out[mine[k]].leafCount();
+    viewingAs(s, [&] {
+      parallelForLargestFirst(size, [&](size_t k) { models::keepStemsOutside(out[mine[k]], *env_, subdivisions); });
+    });
+  }
   return out;
 }
 
@@ -224,6 +236,7 @@ size_t Session::segmentCount() const {
 }
 
 std::vector<models::PlantSystem*> Session::systems() {
+  supportsStale_ = true;
   std::vector<models::PlantSystem*> out;
   for (const auto& s : systems_) out.push_back(s.get());
   return out;
@@ -243,8 +256,9 @@ uint32_t Session::addPlant(models::PlantSpec spec, Json description) {
   const size_t systemsBefore = systems_.size();
   const size_t s = systemFor(spec.model);
   if (s == systems_.size()) throw Error("", "/model", fmt::format("unknown model \"{}\"", spec.model));
+  supportsStale_ = true;
   try {
-    systems_[s]->addPlant(spec, *env_);
+    viewingAs(s, [&] { systems_[s]->addPlant(spec, *env_); });
   } catch (const Error&) {
     if (systems_.size() > systemsBefore) {  // a system made for this plant alone goes again
       systems_.pop_back();
@@ -277,7 +291,7 @@ void Session::setPlantDescription(size_t plant, const Json& description, const s
   if (spec.model != entry.spec.model)
     throw Error(source, "/model", fmt::format("plant {} is of model \"{}\", not \"{}\"", plant, entry.spec.model, spec.model));
   try {
-    system(plant).regrow(indexInSystem(plant), spec, *env_);
+    viewingAs(plants_.at(plant).system, [&] { system(plant).regrow(indexInSystem(plant), spec, *env_); });
   } catch (const Error& e) {
     if (!e.source().empty()) throw;
     throw Error(source, e.location(), e.message());
@@ -341,6 +355,9 @@ void Session::rebuildEnvironment(const std::vector<RigidTransform>& transforms) 
   if (air_) env->setAirFlow(air_.get());
   env->commit();
   env_ = std::move(env);
+  // The new environment has no stems yet.
+  systemHasSupports_.clear();
+  supportsStale_ = true;
   ++obstacleRevision_;
 }
 
@@ -639,6 +656,7 @@ void Session::applyLoaded(Loaded&& loaded) {
   env_->commit();
   systems_ = std::move(loaded.systems);
   systemModels_ = std::move(loaded.systemModels);
+  supportsStale_ = true;
   plants_ = std::move(loaded.plants);
   // Specs beyond the restored plants are kept (a redo may bring their plants back).
   for (size_t i = 0; i < loaded.specs.size(); ++i) {

@@ -83,7 +83,11 @@ class Session {
   // (e.g. changed species keys). Throws Error when the model cannot change them live.
   void setPlantDescription(size_t plant, const Json& description, const std::string& source);
   // The plant's own system and its index there.
-  models::PlantSystem& system(size_t plant) { return *systems_[plants_.at(plant).system]; }
+  // (A plant's system taken for changing marks its stems for the supports' next update.)
+  models::PlantSystem& system(size_t plant) {
+    supportsStale_ = true;
+    return *systems_[plants_.at(plant).system];
+  }
   const models::PlantSystem& system(size_t plant) const { return *systems_[plants_.at(plant).system]; }
   size_t indexInSystem(size_t plant) const { return plants_.at(plant).index; }
   // One system per model in use, in the order the models were first used.
@@ -176,6 +180,21 @@ class Session {
   // Replaces the environment with one made afresh from the scene's and the imported obstacles
   // at their scales, keeping every obstacle transform, light, stroke and the wind.
   void rebuildEnvironment(const std::vector<RigidTransform>& transforms);
+  // Plants as supports (spec.support): gives the environment the stems and leaves of every
+  // support plant, by system (session/plant_supports.cpp). A system's support plants are
+  // snapshot again while it grows or after anything may have changed them.
+  void updateSupports();
+  // Runs f(viewer) with the environment's queries seeing the stems of every system but `viewer`.
+  template <class F>
+  auto viewingAs(size_t viewer, F&& f) const {
+    struct Restore {
+      env::Environment& env;
+      uint32_t before;
+      ~Restore() { env.setStemViewer(before); }
+    } restore{*env_, env_->stemViewer()};
+    env_->setStemViewer(uint32_t(viewer));
+    return f();
+  }
 
   scene::Scene scene_;
   Json sceneDocument_;
@@ -192,6 +211,8 @@ class Session {
   uint64_t obstacleRevision_ = 0;
   std::set<std::pair<size_t, models::GrowthCause>> reportedGrowth_;  // (plant, cause) warned of
   uint32_t steps_ = 0;
+  bool supportsStale_ = true;
+  std::vector<bool> systemHasSupports_;  // by system, as last given to the environment
   double airSeconds_ = 0.0;
   uint32_t airSteps_ = 0;
 };

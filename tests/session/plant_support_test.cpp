@@ -1,0 +1,159 @@
+// Plants as supports (issue: ivy that climbs trees): a plant marked "support" holds climbing
+// plants of the other models through the same environment queries as obstacles.
+#include "session_test_util.h"
+#include "support/climb_checks.h"
+#include "support/determinism.h"
+
+#include "tendril/plant/plant_model.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+namespace tendril::test {
+namespace {
+
+// A component-graph chestnut (seed 004) as the host, climbing ivy (seed 003) at its trunk.
+std::string chestnutScene(bool support, int steps, const std::string& climbers) {
+  return fmt::format(R"({{"tendril": 1, "seed": 3, "steps": {},
+    "environment": {{"obstacles": [{{"name": "ground", "type": "plane", "size": [14, 14]}}],
+                    "lights": [{{"type": "directional", "direction": [-0.3, -1, -0.4]}}]}},
+    "plants": [{{"name": "chestnut", "model": "graph", "graph": "examples/graphs/chestnut.json",
+                 "position": [0, 0, 0], "support": {}}}, {}]}})",
+                     steps, support ? "true" : "false", climbers);
+}
+
+const std::string kIvyAtTrunk = R"({"name": "ivy", "species": "japanese-ivy", "position": [0.38, 0, 0], "seed": 1})";
+
+// What a climber does on its hosts: segments through any support, segments above its first
+// metre near a host stem, leaves whose upper side faces the bark.
+struct OnHost {
+  size_t segments = 0, crossings = 0, inside = 0;
+  size_t high = 0, highOnStem = 0;
+  size_t leavesOnStem = 0, leavesFacingBark = 0;
+};
+
+OnHost onHost(const plant::PlantModel& p, const env::Environment& env, float adhesion) {
+  OnHost r;
+  const float base = p.nodeCount() ? p.position[0].y() : 0.0f;
+  for (size_t i = 0; i < p.nodeCount(); ++i) {
+    const Vec3 a = p.position[i], b = p.tip(i);
+    ++r.segments;
+    if (env.countSegmentHits(a, b) > 0) ++r.crossings;
+    if (env.exactSignedDistance(b, 1.0f) < 0.0f) ++r.inside;
+    const Vec3 mid = 0.5f * (a + b);
+    if (mid.y() > base + 1.0f) {
+      ++r.high;
+      if (auto s = env.closestPoint(mid, adhesion); s && s->onStem()) ++r.highOnStem;
+    }
+  }
+  for (size_t l = 0; l < p.leafCount(); ++l) {
+    const Vec3 attach = p.leafWorldPosition(l);
+    auto s = env.closestPoint(attach, adhesion);
+    if (!s || !s->onStem()) continue;
+    ++r.leavesOnStem;
+    const Vec3 normal = p.leafWorldRotation(l) * Vec3::UnitZ();
+    if (normal.dot(s->away) > 0.0f) ++r.leavesFacingBark;
+  }
+  return r;
+}
+
+void print(const char* what, const OnHost& r) {
+  std::printf("%s: %zu segments, %zu through a support, %zu ends inside; above 1 m %zu of %zu on a host stem; "
+              "%zu of %zu leaves on a stem face away from it\n",
+              what, r.segments, r.crossings, r.inside, r.highOnStem, r.high, r.leavesFacingBark, r.leavesOnStem);
+}
+
+TEST(PlantSupport, IvyClimbsAGraphChestnutAndClingsToItsStems) {
+  auto session = makeSession(chestnutScene(true, 100, kIvyAtTrunk));
+  session->run(100);
+  const auto plants = session->plants();
+  ASSERT_EQ(plants.size(), 2u);
+  env::Environment& env = session->environment();
+  // The queries as the climbing plants see them: the chestnut's stems and the ground.
+  env.setStemViewer(1);
+  const OnHost r = onHost(plants[1], env, 0.08f);
+  env.setStemViewer(env::Environment::kEveryStem);
+  print("ivy on a graph chestnut", r);
+  EXPECT_GT(r.segments, 800u);
+  EXPECT_EQ(r.crossings, 0u);
+  EXPECT_EQ(r.inside, 0u);
+  ASSERT_GT(r.high, 200u);
+  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high)) << r.highOnStem << " of " << r.high;
+  ASSERT_GT(r.leavesOnStem, 200u);
+  EXPECT_EQ(r.leavesFacingBark, r.leavesOnStem);
+  // Above its first metre the ivy is on the tree: it climbed.
+  EXPECT_GT(plant::computeStats(plants[1]).bounds.max.y(), 2.0f);
+}
+
+TEST(PlantSupport, WithoutSupportTheIvyFindsNothingToClimb) {
+  // The mechanism removed: the same scene with the chestnut not a support.
+  auto session = makeSession(chestnutScene(false, 100, kIvyAtTrunk));
+  session->run(100);
+  const auto plants = session->plants();
+  EXPECT_LT(plant::computeStats(plants[1]).bounds.max.y(), 1.0f);
+  EXPECT_LT(plants[1].nodeCount(), 100u);
+}
+
+TEST(PlantSupport, IvyClimbsAnLSystemTree) {
+  const std::string scene = R"({"tendril": 1, "seed": 3, "steps": 120,
+    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [14, 14]}],
+                    "lights": [{"type": "directional", "direction": [-0.3, -1, -0.4]}]},
+    "plants": [{"name": "tree", "model": "lsystem", "grammar": "examples/grammars/abop-2.6-monopodial.ls",
+                "position": [0, 0, 0], "support": true},
+               {"name": "ivy", "species": "japanese-ivy", "position": [0.07, 0, 0], "seed": 1}]})";
+  auto session = makeSession(scene);
+  session->run(120);
+  const auto plants = session->plants();
+  env::Environment& env = session->environment();
+  env.setStemViewer(1);
+  const OnHost r = onHost(plants[1], env, 0.08f);
+  env.setStemViewer(env::Environment::kEveryStem);
+  print("ivy on an L-system tree", r);
+  EXPECT_EQ(r.crossings, 0u);
+  EXPECT_EQ(r.inside, 0u);
+  ASSERT_GT(r.high, 30u);
+  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high)) << r.highOnStem << " of " << r.high;
+  EXPECT_EQ(r.leavesFacingBark, r.leavesOnStem);
+}
+
+TEST(PlantSupport, IvyClimbsAParticlePlant) {
+  // A particle shoot (seed 000) grown straight up toward an overhead light, then ivy seeded
+  // at its foot: the shoot, still moving under its own physics, is the ivy's only support.
+  const std::string scene = R"({"tendril": 1, "seed": 3, "steps": 900,
+    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [14, 14]}],
+                    "lights": [{"type": "directional", "direction": [0, -1, 0]}]},
+    "plants": [{"name": "shoot", "model": "particles", "position": [0, 0.03, 0], "seed": 1, "support": true,
+                "species": {"base": "ivy-particles", "radius": 0.03, "density": 100, "phototropism": 1.0,
+                            "branch_probability": 0.05, "random_walk": 0.02, "max_particles": 300}}]})";
+  auto session = makeSession(scene);
+  session->run(900);
+  const float top = plant::computeStats(session->plants()[0]).bounds.max.y();
+  ASSERT_GT(top, 2.5f);
+  session->addPlant(parseJson(R"({"name": "ivy", "species": "japanese-ivy", "position": [0.045, 0, 0], "seed": 1})",
+                              "ivy.json"),
+                    "ivy.json");
+  session->run(150);
+  const auto plants = session->plants();
+  env::Environment& env = session->environment();
+  env.setStemViewer(1);
+  const OnHost r = onHost(plants[1], env, 0.08f);
+  env.setStemViewer(env::Environment::kEveryStem);
+  print("ivy on a particle shoot", r);
+  EXPECT_EQ(r.crossings, 0u);
+  EXPECT_EQ(r.inside, 0u);
+  ASSERT_GT(r.high, 30u);
+  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high)) << r.highOnStem << " of " << r.high;
+  EXPECT_EQ(r.leavesFacingBark, r.leavesOnStem);
+}
+
+TEST(PlantSupport, TheSameAtEveryThreadCount) {
+  sameAtEveryThreadCount([&] {
+    auto session = makeSession(chestnutScene(true, 40, kIvyAtTrunk));
+    session->run(40);
+    return plant::contentHash(session->plants());
+  });
+}
+
+}  // namespace
+}  // namespace tendril::test
