@@ -1,0 +1,359 @@
+// Seed 000's Figs. 7, 11 and 14 as the shipped scenes and edit script grow them, each with what
+// the figure shows measured: light from the upper left draws the fence's plants toward it
+// (Fig. 11); the column and the facade are covered with about Table 1's particle counts
+// (Fig. 14); seeding a plant and a branch, dragging, wind and cutting each have their effect in
+// one edit script (Fig. 7).
+#include "support/particle_session.h"
+#include "support/test_paths.h"
+#include "tendril/core/json_reader.h"
+#include "tendril/particles/particle_model.h"
+#include "tendril/scene/scene.h"
+#include "tendril/session/edit_script.h"
+#include "tendril/session/session.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <set>
+#include <variant>
+#include <vector>
+
+namespace tendril::particles {
+namespace {
+
+std::filesystem::path scenePath(const std::string& name) { return test::sourceDir() / "examples/scenes" / name; }
+
+bool isStem(const ParticleWorld& w, uint32_t i, uint32_t plant) {
+  return w.active(i) && w.plantOf(i) == plant && !(w.flags(i) & (kLeaf | kDetached | kRoot));
+}
+
+// --- Fig. 11: competition for light from the upper left ---
+
+// The fence scene, its light mirrored left to right when `mirror`, every plant's species with
+// `species` on top; grown for `steps`. Returns, per plant, its stems' mean offset along x from
+// its seed (m): negative leans left.
+std::vector<double> fenceLean(bool mirror, const Json& species, uint32_t steps) {
+  const std::filesystem::path path = scenePath("particles-fig11-fence.json");
+  Json doc = readJsonFile(path);
+  if (mirror)
+    for (Json& light : doc["environment"]["lights"]) light["direction"][0] = -light["direction"][0].get<double>();
+  for (Json& plant : doc["plants"]) plant["species"].update(species);
+  session::Session session(scene::parseScene(doc, path.string(), path.parent_path()));
+  session.run(steps);
+  const ParticleWorld& w = *test::particleWorld(session);
+  std::vector<double> lean;
+  for (uint32_t p = 0; p < w.plantCount(); ++p) {
+    const double seedX = session.scene().plants[p].position.x();
+    double sum = 0;
+    size_t n = 0;
+    for (uint32_t i = 0; i < w.capacity(); ++i)
+      if (isStem(w, i, p)) sum += w.position(i).x() - seedX, ++n;
+    EXPECT_GT(n, 20u) << "plant " << p << " should have grown";
+    lean.push_back(n ? sum / double(n) : 0.0);
+  }
+  return lean;
+}
+
+double mean(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return v.empty() ? 0.0 : s / double(v.size());
+}
+
+size_t countBelow(const std::vector<double>& v, double limit) {
+  return size_t(std::count_if(v.begin(), v.end(), [&](double x) { return x < limit; }));
+}
+
+// The eight plants on the fence grow toward the light from the upper left: their stems lean
+// left of their seeds, and with the light mirrored to the upper right they lean right.
+TEST(ParticleFigures, Fig11sPlantsOnTheFenceGrowTowardTheLightFromTheUpperLeft) {
+  const Json shipped = Json::object();
+  const std::vector<double> left = fenceLean(false, shipped, 1400), right = fenceLean(true, shipped, 1400);
+  for (size_t p = 0; p < left.size(); ++p)
+    std::printf("Fig. 11 ivy%zu: stems' mean offset from the seed %+.2f m, light mirrored %+.2f m\n", p, left[p],
+                right[p]);
+  std::printf("Fig. 11 mean offset: %+.3f m with light from the upper left, %+.3f m from the upper right\n",
+              mean(left), mean(right));
+  ASSERT_EQ(left.size(), 8u);
+  EXPECT_LT(mean(left), -0.15) << "the plants lean toward the light on the left";
+  EXPECT_GT(mean(right), 0.15) << "and toward it on the right when it comes from there";
+  EXPECT_GE(countBelow(left, 0.02), 7u) << "almost every plant leans left";
+  EXPECT_LE(countBelow(right, -0.02), 1u) << "almost every plant leans right";
+}
+
+// --- Fig. 14: the column and the facade ---
+
+struct Cover {
+  size_t covered = 0, cells = 0, particles = 0;
+  float top = 0;  // highest stem particle (m)
+};
+
+// The column (radius 0.25 m, 3 m high at the origin): 12 sectors around it by 12 bands of
+// 0.25 m, a cell covered where a stem particle lies within 8 cm of the surface.
+Cover columnCover(const ParticleWorld& w) {
+  std::set<std::pair<int, int>> hit;
+  Cover c;
+  for (uint32_t p = 0; p < w.plantCount(); ++p)
+    for (uint32_t i = 0; i < w.capacity(); ++i) {
+      if (!isStem(w, i, p)) continue;
+      const Vec3& x = w.position(i);
+      c.top = std::max(c.top, x.y());
+      if (std::abs(std::hypot(x.x(), x.z()) - 0.25f) > 0.08f || x.y() < 0 || x.y() >= 3) continue;
+      const int sector = int((std::atan2(x.z(), x.x()) + kPi) / (2 * kPi) * 12) % 12;
+      hit.insert({sector, int(x.y() / 0.25f)});
+    }
+  c.covered = hit.size();
+  c.cells = 12 * 12;
+  c.particles = w.particleCount();
+  return c;
+}
+
+TEST(ParticleFigures, Fig14sColumnIsCoveredToTheTopWithTable1sParticleCount) {
+  session::Session session(scene::loadScene(scenePath("particles-fig14-column.json")));
+  session.run(uint32_t(session.scene().steps));
+  const Cover c = columnCover(*test::particleWorld(session));
+  std::printf("Fig. 14 column: %zu of %zu cells covered, top stem at %.2f m, %zu particles\n", c.covered, c.cells,
+              c.top, c.particles);
+  EXPECT_GE(c.covered, size_t(0.85 * double(c.cells))) << "the plants cover the column all round";
+  EXPECT_GT(c.top, 2.9f) << "and reach its top";
+  EXPECT_GT(c.particles, 7000u) << "Table 1: 10k particles";
+  EXPECT_LT(c.particles, 14000u) << "Table 1: 10k particles";
+}
+
+// The facade (10 × 4 m, its face at z = 0.15, four windows 1 × 1.2 m centred at y = 1.6):
+// cells of 0.25 m below 2.5 m that are wall rather than window, covered where a stem particle
+// lies within 10 cm of the face.
+Cover facadeCover(const ParticleWorld& w, size_t* columnsReached) {
+  const float windowX[4] = {-3.5f, -1.2f, 1.2f, 3.5f};
+  auto isWindow = [&](int cx, int cy) {
+    const float x = -5.0f + 0.25f * (float(cx) + 0.5f), y = 0.25f * (float(cy) + 0.5f);
+    for (float wx : windowX)
+      if (std::abs(x - wx) < 0.5f && std::abs(y - 1.6f) < 0.6f) return true;
+    return false;
+  };
+  std::set<std::pair<int, int>> hit;
+  Cover c;
+  for (uint32_t p = 0; p < w.plantCount(); ++p)
+    for (uint32_t i = 0; i < w.capacity(); ++i) {
+      if (!isStem(w, i, p)) continue;
+      const Vec3& x = w.position(i);
+      c.top = std::max(c.top, x.y());
+      if (std::abs(x.z() - 0.15f) > 0.1f || x.x() < -5 || x.x() >= 5 || x.y() < 0 || x.y() >= 2.5f) continue;
+      const int cx = int((x.x() + 5.0f) / 0.25f), cy = int(x.y() / 0.25f);
+      if (!isWindow(cx, cy)) hit.insert({cx, cy});
+    }
+  for (int cx = 0; cx < 40; ++cx)
+    for (int cy = 0; cy < 10; ++cy) c.cells += !isWindow(cx, cy);
+  std::set<int> columns;
+  for (const auto& [cx, cy] : hit) columns.insert(cx);
+  *columnsReached = columns.size();
+  c.covered = hit.size();
+  c.particles = w.particleCount();
+  return c;
+}
+
+TEST(ParticleFigures, Fig14sFacadeIsCoveredAroundItsWindowsWithTable1sParticleCount) {
+  session::Session session(scene::loadScene(scenePath("particles-fig14-facade.json")));
+  session.run(uint32_t(session.scene().steps));
+  size_t columns = 0;
+  const Cover c = facadeCover(*test::particleWorld(session), &columns);
+  std::printf("Fig. 14 facade: %zu of %zu wall cells below 2.5 m covered, %zu of 40 columns of 25 cm reached, top "
+              "stem at %.2f m, %zu particles\n",
+              c.covered, c.cells, columns, c.top, c.particles);
+  EXPECT_EQ(columns, 40u) << "the plants cover the facade's whole width";
+  EXPECT_GE(c.covered, size_t(0.6 * double(c.cells))) << "and most of the wall up to the windows' tops";
+  EXPECT_GT(c.top, 2.2f) << "some climb past the windows";
+  EXPECT_GT(c.particles, 20000u) << "Table 1: 25k particles";
+  EXPECT_LT(c.particles, 32000u) << "Table 1: 25k particles";
+}
+
+// --- Fig. 7: seed, branch seed, drag, wind and cut in one edit script ---
+
+// Particles of `plant` descending from `root` (itself included): stems and, separately, leaves.
+std::vector<uint32_t> descendants(const ParticleWorld& w, uint32_t root, bool leaves = false) {
+  std::vector<uint32_t> out;
+  for (uint32_t i = 0; i < w.capacity(); ++i) {
+    if (!w.active(i) || bool(w.flags(i) & kLeaf) != leaves) continue;
+    for (uint32_t q = i; q != kNone; q = w.parent(q))
+      if (q == root) {
+        out.push_back(i);
+        break;
+      }
+  }
+  return out;
+}
+
+size_t stemCount(const ParticleWorld& w, uint32_t plant) {
+  size_t n = 0;
+  for (uint32_t i = 0; i < w.capacity(); ++i) n += isStem(w, i, plant);
+  return n;
+}
+
+// The branch (not leaf) children of a particle.
+std::vector<uint32_t> branchChildren(const ParticleWorld& w, uint32_t particle) {
+  std::vector<uint32_t> out;
+  for (uint32_t i = 0; i < w.capacity(); ++i)
+    if (w.active(i) && w.parent(i) == particle && !(w.flags(i) & kLeaf)) out.push_back(i);
+  return out;
+}
+
+// What each edit of examples/edits/particles-fig07.json did, measured around it.
+struct Fig7 {
+  size_t plantsBefore = 0, plantsAfter = 0;  // seed_plant
+  size_t stemsBeforeBranch = 0;
+  float heightBeforeBranch = 0;
+  uint32_t branchOn = kNone, branch = kNone;  // seed_branch: the stem particle and the new apex
+  std::vector<uint32_t> childrenBefore, childrenAfter;
+  size_t branchStemsAtDrag = 0;
+  uint32_t dragged = kNone;
+  float toFirstTarget[2] = {}, toSecondTarget[2] = {};  // drag: before and after each stretch
+  std::vector<uint32_t> beforeWind;                      // stems above 25 cm when the fan starts
+  std::vector<Vec3> atProbe;                             // their positions 180 steps later
+  uint32_t cutParticle = kNone;
+  size_t stemsBeforeCut = 0, stemsBeyondCut = 0, stemsAfterCut = 0, detachedAfterCut = 0;
+  size_t stemsAtEnd = 0, detachedAtEnd = 0;
+  std::vector<uint32_t> cutOff;
+  float pieceHeight[2] = {};  // the cut-off piece's mean height at the cut and kFallSteps later
+};
+
+constexpr uint32_t kWindProbeStep = 640;
+constexpr uint32_t kFallSteps = 40;
+
+float meanHeight(const ParticleWorld& w, const std::vector<uint32_t>& ids) {
+  double sum = 0;
+  for (uint32_t i : ids) sum += w.position(i).y();
+  return ids.empty() ? 0.0f : float(sum / double(ids.size()));
+}
+
+Fig7 replayFig7(bool wind) {
+  auto s = session::Session::open(scenePath("particles-fig07-edits.json"));
+  session::Editor editor(*s);
+  const session::EditScript script =
+      session::loadEditScript(test::sourceDir() / "examples/edits/particles-fig07.json");
+  const ParticleWorld* w = nullptr;
+  Fig7 f;
+  Vec3 target = Vec3::Zero();  // the drag's current target
+  auto stepTo = [&](uint32_t k) {
+    if (editor.stepsRun() < kWindProbeStep && k >= kWindProbeStep && !f.beforeWind.empty()) {
+      editor.step(kWindProbeStep - editor.stepsRun());
+      for (uint32_t i : f.beforeWind) f.atProbe.push_back(w->position(i));
+    }
+    if (k > editor.stepsRun()) editor.step(k - editor.stepsRun());
+  };
+  for (const session::TimedEdit& t : script.edits) {
+    if (!wind && t.atStep > kWindProbeStep) break;  // the run without wind is for comparing at the probe
+    stepTo(t.atStep);
+    if (std::holds_alternative<session::AddEmitter>(t.edit)) {
+      for (uint32_t i = 0; i < w->capacity(); ++i)
+        if (isStem(*w, i, 0) && w->position(i).y() > 0.25f) f.beforeWind.push_back(i);
+      if (!wind) continue;
+    }
+    if (std::holds_alternative<session::SeedPlant>(t.edit)) f.plantsBefore = s->plantCount();
+    if (const auto* e = std::get_if<session::SeedBranch>(&t.edit)) {
+      f.stemsBeforeBranch = stemCount(*w, 0);
+      for (uint32_t i = 0; i < w->capacity(); ++i)
+        if (isStem(*w, i, 0)) f.heightBeforeBranch = std::max(f.heightBeforeBranch, w->position(i).y());
+      f.branchOn = e->particle;
+      f.childrenBefore = branchChildren(*w, e->particle);
+    }
+    const session::DragBegin* begin = std::get_if<session::DragBegin>(&t.edit);
+    const session::DragMove* move = std::get_if<session::DragMove>(&t.edit);
+    if (begin) {
+      f.branchStemsAtDrag = descendants(*w, f.branch).size();
+      f.dragged = begin->particle;
+      f.toFirstTarget[0] = (w->position(f.dragged) - begin->target).norm();
+    }
+    if (move) {
+      f.toFirstTarget[1] = (w->position(f.dragged) - target).norm();
+      f.toSecondTarget[0] = (w->position(f.dragged) - move->target).norm();
+    }
+    if (std::holds_alternative<session::DragEnd>(t.edit)) f.toSecondTarget[1] = (w->position(f.dragged) - target).norm();
+    if (const auto* e = std::get_if<session::Cut>(&t.edit)) {
+      f.cutParticle = w->snapshotParticles(e->plant).at(e->node);
+      f.stemsBeforeCut = stemCount(*w, 0);
+      f.cutOff = descendants(*w, f.cutParticle);
+      f.stemsBeyondCut = f.cutOff.size();
+    }
+    editor.apply(t.edit);
+    if (!w) w = test::particleWorld(*s);
+    if (begin) target = begin->target;
+    if (move) target = move->target;
+    if (std::holds_alternative<session::SeedPlant>(t.edit)) f.plantsAfter = s->plantCount();
+    if (const auto* e = std::get_if<session::SeedBranch>(&t.edit)) {
+      f.childrenAfter = branchChildren(*w, e->particle);
+      for (uint32_t i : f.childrenAfter)
+        if (std::find(f.childrenBefore.begin(), f.childrenBefore.end(), i) == f.childrenBefore.end()) f.branch = i;
+    }
+    if (std::holds_alternative<session::Cut>(t.edit)) {
+      f.stemsAfterCut = stemCount(*w, 0);
+      for (uint32_t i : f.cutOff) f.detachedAfterCut += w->active(i) && (w->flags(i) & kDetached);
+      f.pieceHeight[0] = meanHeight(*w, f.cutOff);
+      editor.step(kFallSteps);
+      f.pieceHeight[1] = meanHeight(*w, f.cutOff);
+    }
+  }
+  if (!wind) {
+    stepTo(kWindProbeStep);
+    return f;
+  }
+  stepTo(uint32_t(s->scene().steps));
+  f.stemsAtEnd = stemCount(*w, 0);
+  for (uint32_t i = 0; i < w->capacity(); ++i) f.detachedAtEnd += w->active(i) && (w->flags(i) & kDetached);
+  return f;
+}
+
+// The script's five edits on the crate scene: the seed grows into a plant standing beside the
+// crate; the branch seed adds a branch that grows; the drag pulls the held shoot toward each
+// target; the fan's air pushes the plant downwind of where the same script without the fan
+// leaves it; the cut takes off the seeded branch, whose piece falls while the plant grows on.
+TEST(ParticleFigures, Fig7sEditScriptSeedsBranchesDragsBlowsAndCuts) {
+  const Fig7 f = replayFig7(true), still = replayFig7(false);
+  std::printf("Fig. 7 (a): plants %zu -> %zu; %zu stem particles, up to %.2f m, when the branch is seeded\n",
+              f.plantsBefore, f.plantsAfter, f.stemsBeforeBranch, f.heightBeforeBranch);
+  std::printf("Fig. 7 (b): branches on particle %u %zu -> %zu; the seeded branch (from particle %u) has %zu stem particles at the drag\n",
+              f.branchOn, f.childrenBefore.size(), f.childrenAfter.size(), f.branch, f.branchStemsAtDrag);
+  std::printf("Fig. 7 (c): particle %u to the first target %.3f -> %.3f m, to the second %.3f -> %.3f m\n", f.dragged,
+              f.toFirstTarget[0], f.toFirstTarget[1], f.toSecondTarget[0], f.toSecondTarget[1]);
+  ASSERT_EQ(f.atProbe.size(), still.atProbe.size());
+  double moved = 0, downwind = 0;
+  for (size_t k = 0; k < f.atProbe.size(); ++k) {
+    moved += (f.atProbe[k] - still.atProbe[k]).norm();
+    downwind += f.atProbe[k].x() - still.atProbe[k].x();
+  }
+  moved /= double(std::max<size_t>(1, f.atProbe.size()));
+  downwind /= double(std::max<size_t>(1, f.atProbe.size()));
+  std::printf("Fig. 7 (d): %zu stem particles above 25 cm, 180 steps into the wind: %.4f m from where they are without it "
+              "(%.4f m downwind)\n",
+              f.atProbe.size(), moved, downwind);
+  std::printf("Fig. 7 (e): cut at particle %u: stems %zu -> %zu (%zu beyond the cut, %zu of them falling, from %.2f m "
+              "to %.2f m in %u steps); at the end %zu stems, %zu detached particles left\n",
+              f.cutParticle, f.stemsBeforeCut, f.stemsAfterCut, f.stemsBeyondCut, f.detachedAfterCut, f.pieceHeight[0],
+              f.pieceHeight[1], kFallSteps, f.stemsAtEnd, f.detachedAtEnd);
+  // (a) the seed grows into a plant
+  EXPECT_EQ(f.plantsBefore, 0u);
+  EXPECT_EQ(f.plantsAfter, 1u);
+  EXPECT_GT(f.stemsBeforeBranch, 30u);
+  EXPECT_GT(f.heightBeforeBranch, 0.3f) << "it stands up";
+  // (b) the branch seed adds a branch on the picked particle, and the branch grows
+  EXPECT_EQ(f.childrenAfter.size(), f.childrenBefore.size() + 1);
+  ASSERT_NE(f.branch, kNone);
+  EXPECT_GE(f.branchStemsAtDrag, 5u) << "the seeded branch grows";
+  // (c) the drag pulls the held particle toward each target
+  EXPECT_LT(f.toFirstTarget[1], 0.6f * f.toFirstTarget[0]);
+  EXPECT_LT(f.toSecondTarget[1], 0.85f * f.toSecondTarget[0]);
+  // (d) the fan's air moves the plant, downwind on the whole
+  EXPECT_GT(moved, 0.01) << "the fan moves the plant";
+  EXPECT_GT(downwind, 0.8 * moved) << "downwind";
+  // (e) the cut takes off the seeded branch: its particles leave the plant and fall
+  EXPECT_EQ(f.cutParticle, f.branch) << "the script cuts the seeded branch";
+  EXPECT_GE(f.stemsBeyondCut, 10u);
+  EXPECT_EQ(f.stemsAfterCut, f.stemsBeforeCut - f.stemsBeyondCut);
+  EXPECT_EQ(f.detachedAfterCut, f.stemsBeyondCut);
+  EXPECT_LT(f.pieceHeight[1], f.pieceHeight[0] - 0.05f) << "the piece falls";
+  EXPECT_GT(f.stemsAtEnd, f.stemsAfterCut + 100) << "and the plant grows on";
+}
+
+}  // namespace
+}  // namespace tendril::particles
