@@ -350,7 +350,7 @@ void Studio::Impl::handleViewportInput() {
     render::Ray ray = rayAt(pixel);
     if (auto node = session::pickNode(*session, ray.origin, ray.direction, pickTolerance(), camera.far))
       selection = {Selection::Kind::Plant, node->plant, node->node};
-    else if (auto hit = session::pickSurface(*session, ray.origin, ray.direction, camera.far))
+    else if (auto hit = session::pickSurface(*session, ray.origin, ray.direction, camera.far); hit && !hit->onStem())
       selection = {Selection::Kind::Obstacle, hit->obstacle, std::nullopt};
   }
 }
@@ -372,7 +372,7 @@ void Studio::Impl::beginGesture(const Vec2& pixel) {
       seed.model = kSeedModels[seedModel];
       seed.species = seedSpecies;
       seed.position = hit->point;
-      seed.normal = hit->normal.dot(ray.direction) > 0.0f ? Vec3(-hit->normal) : hit->normal;
+      seed.normal = session::seedDirection(*session, *hit, ray.direction);
       seed.seed = nextSeed++;
       if (apply(seed)) selection = {Selection::Kind::Plant, uint32_t(session->plantCount() - 1), std::nullopt};
       return;
@@ -426,6 +426,10 @@ void Studio::Impl::beginGesture(const Vec2& pixel) {
     case Tool::MoveObstacle: {
       auto hit = session::pickSurface(*session, ray.origin, ray.direction, camera.far);
       if (!hit) return;
+      if (hit->onStem()) {
+        status = "move obstacle: that is a plant's stem, not an obstacle";
+        return;
+      }
       selection = {Selection::Kind::Obstacle, hit->obstacle, std::nullopt};
       gesture.active = true;
       gesture.obstacle = hit->obstacle;

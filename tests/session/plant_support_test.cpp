@@ -4,6 +4,8 @@
 #include "support/climb_checks.h"
 #include "support/determinism.h"
 
+#include "tendril/session/edit.h"
+
 #include "tendril/plant/plant_model.h"
 
 #include <gtest/gtest.h>
@@ -145,6 +147,36 @@ TEST(PlantSupport, IvyClimbsAParticlePlant) {
   ASSERT_GT(r.high, 30u);
   EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high)) << r.highOnStem << " of " << r.high;
   EXPECT_EQ(r.leavesFacingBark, r.leavesOnStem);
+}
+
+TEST(PlantSupport, AClimberSeededWhereAClickHitsTheTrunkClimbsIt) {
+  // The studio's seed tool: the ray under the cursor hits the chestnut's trunk (a stem, not an
+  // obstacle), and a climbing plant seeded there along the bark's normal climbs the tree.
+  auto session = makeSession(chestnutScene(true, 100, R"({"name": "moss", "model": "graph",
+      "graph": "examples/graphs/fig2.json", "position": [5, 0, 5]})"));
+  session::Editor editor(*session);
+  editor.step(1);  // the supports are given to the environment as the session steps
+  auto hit = session::pickSurface(*session, Vec3(3, 1.0f, 0.05f), Vec3(-1, 0, 0));
+  ASSERT_TRUE(hit);
+  ASSERT_TRUE(hit->onStem());
+  EXPECT_EQ(session->environment().stem(hit->stem()).plant, 0u);
+  session::SeedPlant seed;
+  seed.model = "climb";
+  seed.position = hit->point;
+  seed.normal = session::seedDirection(*session, *hit, Vec3(-1, 0, 0));
+  EXPECT_GT(seed.normal.y(), 0.9f);
+  editor.apply(seed);
+  editor.step(100);
+  const auto plants = session->plants();
+  ASSERT_EQ(plants.size(), 3u);
+  EXPECT_GT(plant::computeStats(plants[2]).bounds.max.y(), 2.0f);
+  env::Environment& env = session->environment();
+  env.setStemViewer(1);  // the climbing system (the two graph plants share system 0)
+  const OnHost r = onHost(plants[2], env, 0.08f);
+  env.setStemViewer(env::Environment::kEveryStem);
+  print("ivy seeded on the trunk", r);
+  EXPECT_EQ(r.crossings, 0u);
+  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high));
 }
 
 TEST(PlantSupport, TheSameAtEveryThreadCount) {

@@ -465,11 +465,10 @@ std::optional<RayHit> Environment::obstacleRayCast(const Vec3& origin, const Vec
   return hit;
 }
 
-bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
-  assert(!dirty_ && "Environment::commit() must be called after edits");
-  if (!rayAccepted(origin, dir, tMin, tMax)) return false;
-  if (!stemLayers_.empty() && stemOccluded(origin, dir, tMin, tMax, false)) return true;
-  if (obstacles_.empty()) return false;
+namespace {
+
+// Whether anything in `scene` blocks origin + t·dir for t in [tMin, tMax].
+bool sceneOccludes(void* scene, const Vec3& origin, const Vec3& dir, float tMin, float tMax) {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay ray;
@@ -485,8 +484,17 @@ bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, floa
   ray.mask = 0xffffffffu;
   ray.id = 0;
   ray.flags = 0;
-  rtcOccluded1(static_cast<RTCScene>(scene_), &ctx, &ray);
+  rtcOccluded1(static_cast<RTCScene>(scene), &ctx, &ray);
   return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
+}
+
+}  // namespace
+
+bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
+  assert(!dirty_ && "Environment::commit() must be called after edits");
+  if (!rayAccepted(origin, dir, tMin, tMax)) return false;
+  if (!obstacles_.empty() && sceneOccludes(scene_, origin, dir, tMin, tMax)) return true;
+  return !stemLayers_.empty() && stemOccluded(origin, dir, tMin, tMax, false);
 }
 
 bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) const {
@@ -802,6 +810,7 @@ float Environment::obstacleSignedDistance(const Vec3& p, Vec3* gradient) const {
 }
 
 LightSample Environment::light(const Vec3& p) const {
+  assert(!dirty_ && "Environment::commit() must be called after edits");
   LightSample out;
   float total = 0.0f, visible = 0.0f;
   Vec3 dir = Vec3::Zero(), nominal = Vec3::Zero();
@@ -821,8 +830,11 @@ LightSample Environment::light(const Vec3& p) const {
     int unblocked = 0;
     for (int i = 0; i < n; ++i) {
       Vec3 d = coneSample(toLight, l.angularRadius, i, n);
-      if (!occluded(p, d, tMax, 1e-4f) && (stemLayers_.empty() || !stemOccluded(p, d, 1e-4f, tMax, true)))
-        ++unblocked;
+      // Obstacles, then the stems and leaves of support plants, each tested once.
+      const bool blocked = rayAccepted(p, d, 1e-4f, tMax) &&
+                           ((!obstacles_.empty() && sceneOccludes(scene_, p, d, 1e-4f, tMax)) ||
+                            (!stemLayers_.empty() && stemOccluded(p, d, 1e-4f, tMax, true)));
+      if (!blocked) ++unblocked;
     }
     float v = float(unblocked) / float(n);
     total += l.intensity;

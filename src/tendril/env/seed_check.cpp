@@ -49,14 +49,17 @@ bool insideObstacle(const Environment& env, uint32_t id, const Vec3& p) {
 }  // namespace
 
 bool seedInsideObstacle(const Environment& env, const Vec3& position, const Vec3& direction) {
+  // On a surface is not inside, whatever the round-off (a point a ray found on a stem's round
+  // cone may lie a hair within it).
   const float d = env.exactSignedDistance(position, 1.0f);
-  if (d < 0.0f) return true;
+  if (d < -kInsideDepth) return true;
   // Farther than the probe from every surface, the probe cannot reach inside anything.
   if (!(d < kSeedProbeDistance) || !(direction.squaredNorm() > 0.0f)) return false;
   const Vec3 probe = position + kSeedProbeDistance * direction.normalized();
   for (uint32_t id = 0; id < uint32_t(env.obstacleCount()); ++id)
     if (insideObstacle(env, id, probe)) return true;
-  return false;
+  // Support plants' stems (their distances are exact).
+  return env.seesStems() && env.exactSignedDistance(probe, kSeedProbeDistance) < -kInsideDepth;
 }
 
 void checkSeedPosition(const Environment& env, const Vec3& position, const Vec3& direction,

@@ -17,6 +17,11 @@ namespace tendril::env {
 
 RTCDevice environmentDevice();  // environment.cpp
 
+namespace {
+// Depth within a stem that still counts as on its surface (round-off of rays and cones).
+constexpr float kOnSurface = 1e-5f;
+}  // namespace
+
 TubePoint closestOnTube(const StemTube& t, const Vec3& p) {
   // Distance to the union of balls c(s), r(s) along the axis, s in [0, L]: the minimum over s
   // of |p − c(s)| − r(s), a convex function of s whose minimiser has a closed form.
@@ -260,7 +265,9 @@ bool Environment::stemRayCast(const Vec3& origin, const Vec3& dir, float tMin, R
     *tMax = rh.ray.tfar;
     hit->t = rh.ray.tfar;
     hit->point = origin + hit->t * dir;
-    hit->normal = closestOnTube(l.tubes[rh.hit.primID], hit->point).normal;
+    const TubePoint surface = closestOnTube(l.tubes[rh.hit.primID], hit->point);
+    hit->normal = surface.normal;
+    hit->point = surface.point;  // on the surface exactly, not a hair within it
     hit->obstacle = kOnStem;
     hit->triangle = l.first + rh.hit.primID;
     found = true;
@@ -305,7 +312,9 @@ bool Environment::closestStem(const Vec3& p, float radius, const Vec3* direction
     if (best) {
       best->point = s.bestPoint.point;
       best->normal = s.bestPoint.normal;
-      best->away = s.bestPoint.distance < 0.0f ? Vec3(-s.bestPoint.normal) : s.bestPoint.normal;
+      // A point within round-off of the surface (a ray's hit, a seed placed there) is on it:
+      // away from the stem, as outside.
+      best->away = s.bestPoint.distance < -kOnSurface ? Vec3(-s.bestPoint.normal) : s.bestPoint.normal;
       best->distance = std::fabs(s.best);
       best->obstacle = kOnStem;
       best->triangle = l.first + s.bestTube;

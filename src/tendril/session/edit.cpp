@@ -733,4 +733,14 @@ std::optional<env::RayHit> pickSurface(const Session& session, const Vec3& origi
   return session.environment().rayCast(origin, dir.normalized(), maxDistance);
 }
 
+Vec3 seedDirection(const Session& session, const env::RayHit& hit, const Vec3& dir) {
+  const Vec3 normal = hit.normal.dot(dir) > 0.0f ? Vec3(-hit.normal) : hit.normal;
+  if (!hit.onStem()) return normal;
+  Vec3 up = Vec3::UnitY() - Vec3::UnitY().dot(normal) * normal;
+  if (up.norm() > 0.2f) return up.normalized();
+  const env::StemTube& t = session.environment().stem(hit.stem());
+  Vec3 along = (t.b - t.a) - (t.b - t.a).dot(normal) * normal;
+  return along.norm() > 1e-6f ? Vec3(along.normalized()) : anyPerpendicular(normal);
+}
+
 }  // namespace tendril::session

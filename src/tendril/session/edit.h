@@ -255,8 +255,14 @@ struct NodePick {
 // max(segment radius, tolerance) of. `dir` need not be unit length.
 std::optional<NodePick> pickNode(const Session& session, const Vec3& origin, const Vec3& dir,
                                  float tolerance = 0.01f, float maxDistance = 1e4f);
-// The first obstacle surface the ray hits (for seeding and painting).
+// The first surface the ray hits (for seeding and painting): an obstacle's, or a support
+// plant's stem (hit->onStem(); a climber seeded there climbs that plant).
 std::optional<env::RayHit> pickSurface(const Session& session, const Vec3& origin, const Vec3& dir,
                                        float maxDistance = 1e4f);
+// The direction a plant seeded where a ray of direction `dir` hit starts growing in: on an
+// obstacle, its normal toward the ray's side; on a support plant's stem, up along the bark
+// (the world's up in the stem's tangent plane, or the stem's own direction where that is
+// nearly zero), so that a climber seeded on a trunk or a bough climbs it.
+Vec3 seedDirection(const Session& session, const env::RayHit& hit, const Vec3& dir);
 
 }  // namespace tendril::session
