@@ -22,19 +22,16 @@ void appendSupport(const plant::PlantModel& plant, uint32_t plantIndex, std::vec
     t.node = uint32_t(i);
     tubes.push_back(t);
   }
-  // Each blade as the diamond its outline fills about as much of as a leaf does: from the
-  // petiole's end, widest halfway, to the tip.
-  shade.reserve(shade.size() + 2 * plant.leafCount());
+  // Each blade as one triangle of the area its outline fills, about half its quad's, as a leaf
+  // does: its base as wide as the blade, from the petiole's end, its apex at the blade's tip.
+  shade.reserve(shade.size() + plant.leafCount());
   for (size_t l = 0; l < plant.leafCount(); ++l) {
-    const Mat3 axes = plant.leafWorldRotation(l).toRotationMatrix();
-    const Vec3 y = axes.col(1);
+    const Quat rotation = plant.leafWorldRotation(l);
+    const Vec3 y = rotation * Vec3::UnitY();
     const float size = plant.leafSize[l];
-    const Vec3 halfWidth = (0.5f * size * plant.leafAspect(l)) * axes.col(0);
+    const Vec3 halfWidth = (0.5f * size * plant.leafAspect(l)) * (rotation * Vec3::UnitX());
     const Vec3 base = plant.leafWorldPosition(l) + plant.leafPetiole[l] * y;
-    const Vec3 middle = base + 0.5f * size * y;
-    const Vec3 tip = base + size * y;
-    shade.push_back({base, middle + halfWidth, tip});
-    shade.push_back({base, tip, middle - halfWidth});
+    shade.push_back({base - halfWidth, base + halfWidth, base + size * y});
   }
 }
 
