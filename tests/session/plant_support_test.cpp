@@ -179,6 +179,51 @@ TEST(PlantSupport, AClimberSeededWhereAClickHitsTheTrunkClimbsIt) {
   EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high));
 }
 
+TEST(PlantSupport, CuttingAHostBranchTakesItsClimbersAndUndoBringsBothBack) {
+  const std::string scene = R"({"tendril": 1, "seed": 3, "steps": 900,
+    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [14, 14]}],
+                    "lights": [{"type": "directional", "direction": [0, -1, 0]}]},
+    "plants": [{"name": "shoot", "model": "particles", "position": [0, 0.03, 0], "seed": 1, "support": true,
+                "species": {"base": "ivy-particles", "radius": 0.03, "density": 100, "phototropism": 1.0,
+                            "branch_probability": 0.05, "random_walk": 0.02, "max_particles": 300}}]})";
+  auto session = makeSession(scene);
+  session::Editor editor(*session);
+  editor.step(900);
+  session->addPlant(parseJson(R"({"name": "ivy", "species": "japanese-ivy", "position": [0.045, 0, 0], "seed": 1})",
+                              "ivy.json"),
+                    "ivy.json");
+  editor.step(150);
+  const auto before = session->plants();
+  const uint64_t hashBefore = plant::contentHash(before);
+  // The shoot's node 1 m up: everything above it goes, and the ivy's shoots on it.
+  const plant::PlantModel& shoot = before[0];
+  uint32_t cut = 0;
+  for (uint32_t i = 0; i < shoot.nodeCount() && !cut; ++i)
+    if (shoot.parent[i] >= 0 && shoot.position[i].y() > 1.0f) cut = i;
+  ASSERT_GT(cut, 0u);
+  size_t ivyAbove = 0;
+  for (size_t i = 0; i < before[1].nodeCount(); ++i) ivyAbove += before[1].position[i].y() > 1.2f;
+  ASSERT_GT(ivyAbove, 20u);
+  editor.apply(session::Cut{0, cut});
+  const auto after = session->plants();
+  // A particle plant's cut part falls as a detached piece.
+  auto attached = [](const plant::PlantModel& m) {
+    size_t n = 0;
+    for (uint32_t f : m.flags) n += !(f & plant::kNodeBroken);
+    return n;
+  };
+  EXPECT_LT(attached(after[0]), attached(before[0]));
+  size_t ivyAboveAfter = 0;
+  for (size_t i = 0; i < after[1].nodeCount(); ++i) ivyAboveAfter += after[1].position[i].y() > 1.2f;
+  std::printf("cut the shoot at node %u (%.2f m): shoot %zu -> %zu attached nodes, ivy %zu -> %zu nodes (%zu -> %zu above 1.2 m)\n",
+              cut, shoot.position[cut].y(), attached(before[0]), attached(after[0]), before[1].nodeCount(),
+              after[1].nodeCount(), ivyAbove, ivyAboveAfter);
+  EXPECT_EQ(ivyAboveAfter, 0u);
+  EXPECT_GT(after[1].nodeCount(), 20u);  // the ivy below the cut stays
+  editor.undo();
+  EXPECT_EQ(plant::contentHash(session->plants()), hashBefore);
+}
+
 TEST(PlantSupport, TheSameAtEveryThreadCount) {
   sameAtEveryThreadCount([&] {
     auto session = makeSession(chestnutScene(true, 40, kIvyAtTrunk));

@@ -159,11 +159,33 @@ void EditApplier::operator()(const SeedBranch& e) const {
 
 void EditApplier::operator()(const Cut& e) const {
   requirePlant(s, e.plant, "cut");
+  // A support plant's cut branch takes what clings to it: found before the cut, while the
+  // environment still holds the branch's stems.
+  std::vector<bool> removed;
+  if (s.plantSpec(e.plant).support) {
+    const plant::PlantModel host = std::as_const(s).system(e.plant).snapshot(s.indexInSystem(e.plant));
+    if (e.node < host.nodeCount()) {
+      removed.assign(host.nodeCount(), false);
+      removed[e.node] = true;
+      for (size_t i = e.node + 1; i < host.nodeCount(); ++i)
+        removed[i] = host.parent[i] >= 0 && removed[size_t(host.parent[i])];
+    }
+  }
   try {
     s.system(e.plant).cut(s.indexInSystem(e.plant), e.node);
   } catch (const Error& err) {
     throw Error("cut", "/node", fmt::format("plant {} (model \"{}\"): {}", e.plant, s.plantSpec(e.plant).model,
                                             err.message()));
+  }
+  if (removed.empty()) return;
+  // One climber branch at a time, the last first: a cut may renumber the plant's nodes.
+  for (size_t guard = 0; guard < 100000; ++guard) {
+    const auto held = s.clingingTo(e.plant, removed);
+    if (held.empty()) break;
+    const auto [plant, node] = held.back();
+    const size_t before = std::as_const(s).system(plant).segmentCount();
+    s.system(plant).cut(s.indexInSystem(plant), node);
+    if (std::as_const(s).system(plant).segmentCount() == before) break;  // nothing came off: stop
   }
 }
 

@@ -32,4 +32,37 @@ void Session::updateSupports() {
   if (changed) env_->commit();
 }
 
+std::vector<std::pair<uint32_t, uint32_t>> Session::clingingTo(size_t host, const std::vector<bool>& removed) const {
+  std::vector<std::pair<uint32_t, uint32_t>> out;
+  if (host >= plants_.size() || !specs_[host].spec.support) return out;
+  for (size_t p = 0; p < plants_.size(); ++p) {
+    const size_t s = plants_[p].system;
+    // Only climb and particle plants can be cut; plants of the host's own system never see it.
+    if (p == host || s == plants_[host].system || (specs_[p].spec.model != "climb" && specs_[p].spec.model != "particles"))
+      continue;
+    const models::GrowthGauge* gauge = systems_[s]->growthGauge();
+    const float stated = gauge ? gauge->growthReading(plants_[p].index).supportReach : 0.0f;
+    const float reach = stated > 0.0f ? stated : 0.1f;
+    const plant::PlantModel m = systems_[s]->snapshot(plants_[p].index);
+    std::vector<bool> held(m.nodeCount(), false);
+    viewingAs(s, [&] {
+      for (size_t i = 0; i < m.nodeCount(); ++i) {
+        const std::optional<env::SurfacePoint> sp = env_->closestPoint(m.position[i], reach);
+        if (!sp || !sp->onStem()) continue;
+        const env::StemTube& t = env_->stem(sp->stem());
+        held[i] = t.plant == host && t.node < removed.size() && removed[t.node];
+      }
+    });
+    // Parents come before children: a held node whose parent is held goes with the parent.
+    std::vector<bool> gone(m.nodeCount(), false);
+    for (size_t i = 0; i < m.nodeCount(); ++i) {
+      const int32_t parent = m.parent[i];
+      const bool parentGone = parent >= 0 && gone[size_t(parent)];
+      gone[i] = parentGone || held[i];
+      if (held[i] && !parentGone) out.emplace_back(uint32_t(p), uint32_t(i));
+    }
+  }
+  return out;
+}
+
 }  // namespace tendril::session

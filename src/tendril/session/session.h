@@ -90,6 +90,12 @@ class Session {
   }
   const models::PlantSystem& system(size_t plant) const { return *systems_[plants_.at(plant).system]; }
   size_t indexInSystem(size_t plant) const { return plants_.at(plant).index; }
+  // Plants as supports: the nodes of other plants that cling to the stems of the host's nodes
+  // marked in `removed` (a cut branch of the host, as the host is before the cut): per plant,
+  // the first such node on each path from its root, whose subtree goes with it. A node clings
+  // to the support surface nearest it within its species' support reach (0.1 m for species
+  // that state none). Plants of models that cannot be cut are left out.
+  std::vector<std::pair<uint32_t, uint32_t>> clingingTo(size_t host, const std::vector<bool>& removed) const;
   // One system per model in use, in the order the models were first used.
   std::vector<models::PlantSystem*> systems();
   // The bodies the simulated air may push, over every system that takes part in it
