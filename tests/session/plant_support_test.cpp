@@ -66,24 +66,54 @@ void print(const char* what, const OnHost& r) {
               what, r.segments, r.crossings, r.inside, r.highOnStem, r.high, r.leavesFacingBark, r.leavesOnStem);
 }
 
+// The climber `plant` as the queries of its system (`viewer`) see the supports, printed.
+OnHost measure(session::Session& session, const plant::PlantModel& plant, uint32_t viewer, const char* what) {
+  env::Environment& env = session.environment();
+  env.setStemViewer(viewer);
+  const OnHost r = onHost(plant, env, 0.08f);
+  env.setStemViewer(env::Environment::kEveryStem);
+  print(what, r);
+  return r;
+}
+
+// Nothing through a support, at least `high` segments above the first metre, 90 % of them on
+// a host stem, every leaf on a stem facing away from it.
+void expectClimbsHost(const OnHost& r, size_t high) {
+  EXPECT_EQ(r.crossings, 0u);
+  EXPECT_EQ(r.inside, 0u);
+  ASSERT_GT(r.high, high);
+  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high)) << r.highOnStem << " of " << r.high;
+  EXPECT_EQ(r.leavesFacingBark, r.leavesOnStem);
+}
+
+// A particle shoot (seed 000) grown 900 steps straight up toward an overhead light, a support,
+// then climbing ivy seeded at its foot and grown 150 steps.
+const std::string kShootScene = R"({"tendril": 1, "seed": 3, "steps": 900,
+    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [14, 14]}],
+                    "lights": [{"type": "directional", "direction": [0, -1, 0]}]},
+    "plants": [{"name": "shoot", "model": "particles", "position": [0, 0.03, 0], "seed": 1, "support": true,
+                "species": {"base": "ivy-particles", "radius": 0.03, "density": 100, "phototropism": 1.0,
+                            "branch_probability": 0.05, "random_walk": 0.02, "max_particles": 300}}]})";
+
+void growShootThenIvy(session::Editor& editor) {
+  editor.step(900);
+  ASSERT_GT(plant::computeStats(editor.session().plants()[0]).bounds.max.y(), 2.5f);
+  editor.session().addPlant(
+      parseJson(R"({"name": "ivy", "species": "japanese-ivy", "position": [0.045, 0, 0], "seed": 1})", "ivy.json"),
+      "ivy.json");
+  editor.step(150);
+}
+
 TEST(PlantSupport, IvyClimbsAGraphChestnutAndClingsToItsStems) {
   auto session = makeSession(chestnutScene(true, 100, kIvyAtTrunk));
   session->run(100);
   const auto plants = session->plants();
   ASSERT_EQ(plants.size(), 2u);
-  env::Environment& env = session->environment();
-  // The queries as the climbing plants see them: the chestnut's stems and the ground.
-  env.setStemViewer(1);
-  const OnHost r = onHost(plants[1], env, 0.08f);
-  env.setStemViewer(env::Environment::kEveryStem);
-  print("ivy on a graph chestnut", r);
+  // The queries as the climbing plants (system 1) see them: the chestnut's stems and the ground.
+  const OnHost r = measure(*session, plants[1], 1, "ivy on a graph chestnut");
   EXPECT_GT(r.segments, 800u);
-  EXPECT_EQ(r.crossings, 0u);
-  EXPECT_EQ(r.inside, 0u);
-  ASSERT_GT(r.high, 200u);
-  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high)) << r.highOnStem << " of " << r.high;
-  ASSERT_GT(r.leavesOnStem, 200u);
-  EXPECT_EQ(r.leavesFacingBark, r.leavesOnStem);
+  expectClimbsHost(r, 200);
+  EXPECT_GT(r.leavesOnStem, 200u);
   // Above its first metre the ivy is on the tree: it climbed.
   EXPECT_GT(plant::computeStats(plants[1]).bounds.max.y(), 2.0f);
 }
@@ -106,47 +136,15 @@ TEST(PlantSupport, IvyClimbsAnLSystemTree) {
                {"name": "ivy", "species": "japanese-ivy", "position": [0.07, 0, 0], "seed": 1}]})";
   auto session = makeSession(scene);
   session->run(120);
-  const auto plants = session->plants();
-  env::Environment& env = session->environment();
-  env.setStemViewer(1);
-  const OnHost r = onHost(plants[1], env, 0.08f);
-  env.setStemViewer(env::Environment::kEveryStem);
-  print("ivy on an L-system tree", r);
-  EXPECT_EQ(r.crossings, 0u);
-  EXPECT_EQ(r.inside, 0u);
-  ASSERT_GT(r.high, 30u);
-  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high)) << r.highOnStem << " of " << r.high;
-  EXPECT_EQ(r.leavesFacingBark, r.leavesOnStem);
+  expectClimbsHost(measure(*session, session->plants()[1], 1, "ivy on an L-system tree"), 30);
 }
 
 TEST(PlantSupport, IvyClimbsAParticlePlant) {
-  // A particle shoot (seed 000) grown straight up toward an overhead light, then ivy seeded
-  // at its foot: the shoot, still moving under its own physics, is the ivy's only support.
-  const std::string scene = R"({"tendril": 1, "seed": 3, "steps": 900,
-    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [14, 14]}],
-                    "lights": [{"type": "directional", "direction": [0, -1, 0]}]},
-    "plants": [{"name": "shoot", "model": "particles", "position": [0, 0.03, 0], "seed": 1, "support": true,
-                "species": {"base": "ivy-particles", "radius": 0.03, "density": 100, "phototropism": 1.0,
-                            "branch_probability": 0.05, "random_walk": 0.02, "max_particles": 300}}]})";
-  auto session = makeSession(scene);
-  session->run(900);
-  const float top = plant::computeStats(session->plants()[0]).bounds.max.y();
-  ASSERT_GT(top, 2.5f);
-  session->addPlant(parseJson(R"({"name": "ivy", "species": "japanese-ivy", "position": [0.045, 0, 0], "seed": 1})",
-                              "ivy.json"),
-                    "ivy.json");
-  session->run(150);
-  const auto plants = session->plants();
-  env::Environment& env = session->environment();
-  env.setStemViewer(1);
-  const OnHost r = onHost(plants[1], env, 0.08f);
-  env.setStemViewer(env::Environment::kEveryStem);
-  print("ivy on a particle shoot", r);
-  EXPECT_EQ(r.crossings, 0u);
-  EXPECT_EQ(r.inside, 0u);
-  ASSERT_GT(r.high, 30u);
-  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high)) << r.highOnStem << " of " << r.high;
-  EXPECT_EQ(r.leavesFacingBark, r.leavesOnStem);
+  // The shoot, still moving under its own physics, is the ivy's only support.
+  auto session = makeSession(kShootScene);
+  session::Editor editor(*session);
+  growShootThenIvy(editor);
+  expectClimbsHost(measure(*session, session->plants()[1], 1, "ivy on a particle shoot"), 30);
 }
 
 TEST(PlantSupport, AClimberSeededWhereAClickHitsTheTrunkClimbsIt) {
@@ -170,29 +168,14 @@ TEST(PlantSupport, AClimberSeededWhereAClickHitsTheTrunkClimbsIt) {
   const auto plants = session->plants();
   ASSERT_EQ(plants.size(), 3u);
   EXPECT_GT(plant::computeStats(plants[2]).bounds.max.y(), 2.0f);
-  env::Environment& env = session->environment();
-  env.setStemViewer(1);  // the climbing system (the two graph plants share system 0)
-  const OnHost r = onHost(plants[2], env, 0.08f);
-  env.setStemViewer(env::Environment::kEveryStem);
-  print("ivy seeded on the trunk", r);
-  EXPECT_EQ(r.crossings, 0u);
-  EXPECT_GE(double(r.highOnStem), 0.9 * double(r.high));
+  // The climbing system is 1 (the two graph plants share system 0).
+  expectClimbsHost(measure(*session, plants[2], 1, "ivy seeded on the trunk"), 200);
 }
 
 TEST(PlantSupport, CuttingAHostBranchTakesItsClimbersAndUndoBringsBothBack) {
-  const std::string scene = R"({"tendril": 1, "seed": 3, "steps": 900,
-    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [14, 14]}],
-                    "lights": [{"type": "directional", "direction": [0, -1, 0]}]},
-    "plants": [{"name": "shoot", "model": "particles", "position": [0, 0.03, 0], "seed": 1, "support": true,
-                "species": {"base": "ivy-particles", "radius": 0.03, "density": 100, "phototropism": 1.0,
-                            "branch_probability": 0.05, "random_walk": 0.02, "max_particles": 300}}]})";
-  auto session = makeSession(scene);
+  auto session = makeSession(kShootScene);
   session::Editor editor(*session);
-  editor.step(900);
-  session->addPlant(parseJson(R"({"name": "ivy", "species": "japanese-ivy", "position": [0.045, 0, 0], "seed": 1})",
-                              "ivy.json"),
-                    "ivy.json");
-  editor.step(150);
+  growShootThenIvy(editor);
   const auto before = session->plants();
   const uint64_t hashBefore = plant::contentHash(before);
   // The shoot's node 1 m up: everything above it goes, and the ivy's shoots on it.

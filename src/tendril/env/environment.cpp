@@ -439,18 +439,7 @@ std::optional<RayHit> Environment::obstacleRayCast(const Vec3& origin, const Vec
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
-  rh.ray.org_x = origin.x();
-  rh.ray.org_y = origin.y();
-  rh.ray.org_z = origin.z();
-  rh.ray.dir_x = dir.x();
-  rh.ray.dir_y = dir.y();
-  rh.ray.dir_z = dir.z();
-  rh.ray.tnear = tMin;
-  rh.ray.tfar = tMax;
-  rh.ray.time = 0.0f;
-  rh.ray.mask = 0xffffffffu;
-  rh.ray.id = 0;
-  rh.ray.flags = 0;
+  initRay(rh.ray, origin, dir, tMin, tMax);
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(static_cast<RTCScene>(scene_), &ctx, &rh);
@@ -472,18 +461,7 @@ bool sceneOccludes(void* scene, const Vec3& origin, const Vec3& dir, float tMin,
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay ray;
-  ray.org_x = origin.x();
-  ray.org_y = origin.y();
-  ray.org_z = origin.z();
-  ray.dir_x = dir.x();
-  ray.dir_y = dir.y();
-  ray.dir_z = dir.z();
-  ray.tnear = tMin;
-  ray.tfar = tMax;
-  ray.time = 0.0f;
-  ray.mask = 0xffffffffu;
-  ray.id = 0;
-  ray.flags = 0;
+  initRay(ray, origin, dir, tMin, tMax);
   rtcOccluded1(static_cast<RTCScene>(scene), &ctx, &ray);
   return ray.tfar < 0.0f;  // Embree sets tfar = -inf on a hit
 }

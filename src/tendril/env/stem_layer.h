@@ -26,4 +26,16 @@ struct Environment::StemLayer {
   }
 };
 
+// An Embree ray from origin along dir over [tMin, tMax], every geometry mask.
+inline void initRay(RTCRay& ray, const Vec3& origin, const Vec3& dir, float tMin, float tMax) {
+  ray.org_x = origin.x(), ray.org_y = origin.y(), ray.org_z = origin.z();
+  ray.dir_x = dir.x(), ray.dir_y = dir.y(), ray.dir_z = dir.z();
+  ray.tnear = tMin;
+  ray.tfar = tMax;
+  ray.time = 0.0f;
+  ray.mask = 0xffffffffu;
+  ray.id = 0;
+  ray.flags = 0;
+}
+
 }  // namespace tendril::env

@@ -233,21 +233,6 @@ void Environment::commitStems() {
   }
 }
 
-namespace {
-
-void initRay(RTCRay& ray, const Vec3& origin, const Vec3& dir, float tMin, float tMax) {
-  ray.org_x = origin.x(), ray.org_y = origin.y(), ray.org_z = origin.z();
-  ray.dir_x = dir.x(), ray.dir_y = dir.y(), ray.dir_z = dir.z();
-  ray.tnear = tMin;
-  ray.tfar = tMax;
-  ray.time = 0.0f;
-  ray.mask = 0xffffffffu;
-  ray.id = 0;
-  ray.flags = 0;
-}
-
-}  // namespace
-
 bool Environment::stemRayCast(const Vec3& origin, const Vec3& dir, float tMin, RayHit* hit, float* tMax) const {
   bool found = false;
   RTCIntersectContext ctx;
