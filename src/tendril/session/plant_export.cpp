@@ -137,7 +137,17 @@ std::vector<std::string> writePlantFiles(const Session& session, const std::file
 std::vector<wind::AnimatedPlant> animatedPlants(const Session& session, const io::ExportScene& exported) {
   const std::vector<plant::GrowthFlowSpecies> species = session.growthFlow();
   std::vector<wind::AnimatedPlant> animated;
-  for (size_t i = 0; i < exported.plants.size(); ++i) animated.push_back({&exported.plants[i], species.at(i)});
+  for (size_t i = 0; i < exported.plants.size(); ++i) {
+    wind::AnimatedPlant a{&exported.plants[i], species.at(i)};
+    // Nodes clinging to support plants follow them in the clip.
+    const std::vector<Session::Attachment> at = session.attachments(i, exported.plants[i], kClingReach);
+    if (std::any_of(at.begin(), at.end(), [](const Session::Attachment& x) { return x.plant >= 0; })) {
+      a.hostPlant.resize(at.size());
+      a.hostNode.resize(at.size());
+      for (size_t k = 0; k < at.size(); ++k) a.hostPlant[k] = at[k].plant, a.hostNode[k] = at[k].node;
+    }
+    animated.push_back(std::move(a));
+  }
   return animated;
 }
 

@@ -47,7 +47,11 @@ std::vector<std::string> writePivotPainterFiles(const Session& session, io::Expo
                                                 const scene::OutputSettings& output, const std::filesystem::path& outDir,
                                                 const std::string& stem, const std::string& source);
 
-// The exported plants with their Growth-Flow constants, for the wind and growth clips.
+// The exported plants with their Growth-Flow constants, for the wind and growth clips. A node
+// of a plant that is not a support clings to a support plant's stem when that stem's surface is
+// the nearest within kClingReach (Session::attachments): the clip moves it with its host.
+// `exported` holds the session's plants as plants() gives them, in its order.
+inline constexpr float kClingReach = 0.08f;  // m: the climbing species' adhesion distance
 std::vector<wind::AnimatedPlant> animatedPlants(const Session& session, const io::ExportScene& exported);
 // A wind clip of `seconds` with the scene's output settings (fps, joints, mesh) and seed.
 wind::WindAnimationOptions windClipOptions(const Session& session, float seconds);

@@ -44,15 +44,10 @@ std::vector<std::pair<uint32_t, uint32_t>> Session::clingingTo(size_t host, cons
     const float stated = gauge ? gauge->growthReading(plants_[p].index).supportReach : 0.0f;
     const float reach = stated > 0.0f ? stated : 0.1f;
     const plant::PlantModel m = systems_[s]->snapshot(plants_[p].index);
+    const std::vector<Attachment> at = attachments(p, m, reach);
     std::vector<bool> held(m.nodeCount(), false);
-    viewingAs(s, [&] {
-      for (size_t i = 0; i < m.nodeCount(); ++i) {
-        const std::optional<env::SurfacePoint> sp = env_->closestPoint(m.position[i], reach);
-        if (!sp || !sp->onStem()) continue;
-        const env::StemTube& t = env_->stem(sp->stem());
-        held[i] = t.plant == host && t.node < removed.size() && removed[t.node];
-      }
-    });
+    for (size_t i = 0; i < m.nodeCount(); ++i)
+      held[i] = at[i].plant == int32_t(host) && size_t(at[i].node) < removed.size() && removed[size_t(at[i].node)];
     // Parents come before children: a held node whose parent is held goes with the parent.
     std::vector<bool> gone(m.nodeCount(), false);
     for (size_t i = 0; i < m.nodeCount(); ++i) {

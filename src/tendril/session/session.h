@@ -112,6 +112,18 @@ class Session {
   const Json& sceneDocument() const { return sceneDocument_; }
   const std::filesystem::path& baseDir() const { return baseDir_; }
 
+  // --- climbers on plants (session/plant_attachments.cpp) ---
+  // Where a plant clings to the stems of support plants: per node of `snapshot` (the plant as
+  // plants() gives it), the host plant (index here) and host node whose stem surface is the
+  // nearest surface within `reach` of the node's position, else {-1, -1}. The queries see the
+  // stems of every model's system but the plant's own (as its growth does). A support plant
+  // clings to nothing, so no two plants hold each other.
+  struct Attachment {
+    int32_t plant = -1;
+    int32_t node = -1;
+  };
+  std::vector<Attachment> attachments(size_t plant, const plant::PlantModel& snapshot, float reach) const;
+
   // --- state ---
   // Everything that decides future steps: the environment's editable state (obstacle
   // transforms, lights, strokes, wind), every plant (its description and its system's state),

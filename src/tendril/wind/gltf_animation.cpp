@@ -16,6 +16,7 @@
 #include <cstring>
 #include <sstream>
 #include <array>
+#include <map>
 #include <memory>
 #include <unordered_map>
 
@@ -126,6 +127,58 @@ std::vector<std::array<std::vector<Vec3>, 3>> leafDisplacements(const plant::Pla
   return out;
 }
 
+// Checks the plants' hosts (AnimatedPlant::hostPlant / hostNode) and says whether any node clings.
+bool checkHosts(const std::vector<AnimatedPlant>& plants, const std::filesystem::path& source) {
+  const std::string path = source.string();
+  bool any = false;
+  for (size_t pi = 0; pi < plants.size(); ++pi) {
+    const AnimatedPlant& a = plants[pi];
+    if (a.hostPlant.empty() && a.hostNode.empty()) continue;
+    const size_t n = a.plant->nodeCount();
+    if (a.hostPlant.size() != n || a.hostNode.size() != n)
+      throw Error(path, "", fmt::format("plant {} has {} nodes but {} host plants and {} host nodes", pi, n,
+                                        a.hostPlant.size(), a.hostNode.size()));
+    for (size_t i = 0; i < n; ++i) {
+      const int32_t h = a.hostPlant[i];
+      if (h < 0) continue;
+      if (size_t(h) >= plants.size() || size_t(h) == pi)
+        throw Error(path, "", fmt::format("plant {} node {}: host plant {} is not another plant of the clip", pi, i, h));
+      const AnimatedPlant& host = plants[size_t(h)];
+      if (a.hostNode[i] < 0 || size_t(a.hostNode[i]) >= host.plant->nodeCount())
+        throw Error(path, "", fmt::format("plant {} node {}: host plant {} has no node {}", pi, i, h, a.hostNode[i]));
+      if (std::any_of(host.hostPlant.begin(), host.hostPlant.end(), [](int32_t x) { return x >= 0; }))
+        throw Error(path, "", fmt::format("plant {} node {}: host plant {} clings to a plant itself", pi, i, h));
+      any = true;
+    }
+  }
+  return any;
+}
+
+// A plant's reduced hierarchy in the clip.
+struct Skeleton {
+  std::vector<int32_t> joints;       // the node of each joint, parents first
+  std::vector<int32_t> jointOf;      // per node: the nearest joint at or above it
+  std::vector<int32_t> parentJoint;  // per joint; -1 for a root
+  int firstNode = 0;                 // the glTF node of joint 0
+};
+
+Skeleton skeletonOf(const plant::PlantModel& rest, int maxJoints) {
+  Skeleton s;
+  const size_t n = rest.nodeCount();
+  s.joints = chooseJoints(rest, maxJoints);
+  std::vector<int32_t> jointOfJointNode(n, -1);
+  for (size_t j = 0; j < s.joints.size(); ++j) jointOfJointNode[size_t(s.joints[j])] = int32_t(j);
+  s.jointOf.assign(n, -1);
+  for (size_t i = 0; i < n; ++i)
+    s.jointOf[i] = jointOfJointNode[i] >= 0 ? jointOfJointNode[i] : s.jointOf[size_t(rest.parent[i])];
+  s.parentJoint.assign(s.joints.size(), -1);
+  for (size_t j = 0; j < s.joints.size(); ++j) {
+    int32_t p = rest.parent[size_t(s.joints[j])];
+    s.parentJoint[j] = p < 0 ? -1 : s.jointOf[size_t(p)];
+  }
+  return s;
+}
+
 }  // namespace
 
 WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
@@ -140,6 +193,10 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
   ExportScene scene;
   for (size_t pi = 0; pi < plants.size(); ++pi) {
     if (!plants[pi].plant) throw Error(path.string(), "", fmt::format("plant {} is missing", pi));
+  }
+  // Climbers follow their hosts' joints (not in growth clips).
+  const bool attached = checkHosts(plants, path) && !options.growth;
+  for (size_t pi = 0; pi < plants.size(); ++pi) {
     wind::MotionSettings ms;
     ms.loopSeconds = options.seconds;
     ms.seed = options.seed + pi;
@@ -168,6 +225,24 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
   gltf.accessors[size_t(timeAccessor)].minValues = {0.0};
   gltf.accessors[size_t(timeAccessor)].maxValues = {double(options.seconds)};
 
+  // Every plant's reduced hierarchy first, since a climber's skin lists its hosts' joints. The
+  // nodes: the shared root when climbers cling, then per plant its joints and its mesh node.
+  std::vector<Skeleton> skeletons(plants.size());
+  int rootNode = -1;
+  if (attached) {
+    tinygltf::Node root;
+    root.name = "plants";
+    gltf.nodes.push_back(std::move(root));
+    rootNode = 0;
+    gscene.nodes.push_back(rootNode);
+  }
+  for (size_t pi = 0, next = gltf.nodes.size(); pi < plants.size(); ++pi) {
+    skeletons[pi] = skeletonOf(scene.plants[pi], options.maxJoints);
+    skeletons[pi].firstNode = int(next);
+    next += skeletons[pi].joints.size() + (model.objects[pi].parts.empty() ? 0 : 1);
+  }
+  std::vector<std::pair<int, int>> hostChildren;  // (host joint, climber joint), linked once all nodes exist
+
   WindAnimationStats stats;
   stats.keyframes = size_t(frames);
   for (size_t pi = 0; pi < plants.size(); ++pi) {
@@ -177,31 +252,45 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
     const size_t n = rest.nodeCount();
 
     // The reduced hierarchy and each node's joint (nearest joint at or above it).
-    std::vector<int32_t> joints = chooseJoints(rest, options.maxJoints);
-    std::vector<int32_t> jointOfJointNode(n, -1);
-    for (size_t j = 0; j < joints.size(); ++j) jointOfJointNode[size_t(joints[j])] = int32_t(j);
-    std::vector<int32_t> jointOf(n, -1);
-    for (size_t i = 0; i < n; ++i)
-      jointOf[i] = jointOfJointNode[i] >= 0 ? jointOfJointNode[i] : jointOf[size_t(rest.parent[i])];
-    std::vector<int32_t> parentJoint(joints.size(), -1);
-    for (size_t j = 0; j < joints.size(); ++j) {
-      int32_t p = rest.parent[size_t(joints[j])];
-      parentJoint[j] = p < 0 ? -1 : jointOf[size_t(p)];
-    }
+    const Skeleton& skeleton = skeletons[pi];
+    const std::vector<int32_t>& joints = skeleton.joints;
+    const std::vector<int32_t>& jointOf = skeleton.jointOf;
+    const std::vector<int32_t>& parentJoint = skeleton.parentJoint;
+    // A clinging node's host: its plant and the glTF node and rest position of the host's joint.
+    const std::vector<int32_t>* hostPlant = attached && !plants[pi].hostPlant.empty() ? &plants[pi].hostPlant : nullptr;
+    auto clings = [&](size_t i) { return hostPlant && (*hostPlant)[i] >= 0; };
+    auto hostJointNode = [&](size_t i) {
+      const Skeleton& host = skeletons[size_t((*hostPlant)[i])];
+      return host.firstNode + host.jointOf[size_t(plants[pi].hostNode[i])];
+    };
+    auto hostJointRest = [&](size_t i) {
+      const size_t h = size_t((*hostPlant)[i]);
+      const Skeleton& host = skeletons[h];
+      return scene.plants[h].position[size_t(host.joints[size_t(host.jointOf[size_t(plants[pi].hostNode[i])])])];
+    };
 
-    // Joint nodes: rest pose = translation to the node's position, relative to the parent joint.
+    // Joint nodes: rest pose = translation to the node's position, relative to the parent joint
+    // (for a joint on a clinging node, relative to the host's joint).
     const int firstNode = int(gltf.nodes.size());
+    if (firstNode != skeleton.firstNode) throw Error(path.string(), "", "wind animation: joint nodes out of place");
     for (size_t j = 0; j < joints.size(); ++j) {
       tinygltf::Node node;
       node.name = fmt::format("{}-joint-{}", object.name, j);
-      Vec3 p = rest.position[size_t(joints[j])];
-      if (parentJoint[j] >= 0) p -= rest.position[size_t(joints[size_t(parentJoint[j])])];
+      const size_t at = size_t(joints[j]);
+      Vec3 p = rest.position[at];
+      if (clings(at)) p -= hostJointRest(at);
+      else if (parentJoint[j] >= 0) p -= rest.position[size_t(joints[size_t(parentJoint[j])])];
       node.translation = {p.x(), p.y(), p.z()};
       gltf.nodes.push_back(std::move(node));
     }
     for (size_t j = 0; j < joints.size(); ++j) {
-      if (parentJoint[j] >= 0)
+      const size_t at = size_t(joints[j]);
+      if (clings(at))
+        hostChildren.push_back({hostJointNode(at), firstNode + int(j)});
+      else if (parentJoint[j] >= 0)
         gltf.nodes[size_t(firstNode + parentJoint[j])].children.push_back(firstNode + int(j));
+      else if (rootNode >= 0)
+        gltf.nodes[size_t(rootNode)].children.push_back(firstNode + int(j));
       else
         gscene.nodes.push_back(firstNode + int(j));
     }
@@ -209,14 +298,36 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
     tinygltf::Skin skin;
     skin.name = object.name;
     std::vector<float> inverseBind;
-    for (size_t j = 0; j < joints.size(); ++j) {
-      skin.joints.push_back(firstNode + int(j));
-      Vec3 p = rest.position[size_t(joints[j])];
+    auto bindAt = [&](const Vec3& p) {
       float m[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -p.x(), -p.y(), -p.z(), 1};  // column-major
       inverseBind.insert(inverseBind.end(), m, m + 16);
+    };
+    for (size_t j = 0; j < joints.size(); ++j) {
+      skin.joints.push_back(firstNode + int(j));
+      bindAt(rest.position[size_t(joints[j])]);
+    }
+    // Each node's joint in the skin: its own plant's, or for a clinging node its host's joint,
+    // added to the skin in the order the nodes first use them.
+    std::vector<int32_t> skinJointOf = jointOf;
+    if (hostPlant) {
+      std::map<int, int32_t> hostJoints;  // glTF node → index in the skin
+      for (size_t i = 0; i < n; ++i) {
+        if (!clings(i)) continue;
+        const int node = hostJointNode(i);
+        auto found = hostJoints.find(node);
+        if (found == hostJoints.end()) {
+          found = hostJoints.emplace(node, int32_t(skin.joints.size())).first;
+          skin.joints.push_back(node);
+          bindAt(hostJointRest(i));
+        }
+        skinJointOf[i] = found->second;
+      }
+      if (skin.joints.size() > 65535)
+        throw Error(path.string(), "", fmt::format("plant {}: its skin would have {} joints, more than 65535", pi,
+                                                   skin.joints.size()));
     }
     skin.inverseBindMatrices = bin.accessor(bin.view(inverseBind.data(), inverseBind.size() * sizeof(float), 0),
-                                            TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_MAT4, joints.size());
+                                            TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_MAT4, skin.joints.size());
     gltf.skins.push_back(skin);
     const int skinIndex = int(gltf.skins.size() - 1);
 
@@ -244,7 +355,7 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
       std::vector<uint16_t> jointIds(nv * 4, 0);
       std::vector<float> weights(nv * 4, 0.0f);
       for (size_t v = 0; v < nv; ++v) {
-        jointIds[4 * v] = m.nodeIds.empty() ? 0 : uint16_t(jointOf[m.nodeIds[v]]);
+        jointIds[4 * v] = m.nodeIds.empty() ? 0 : uint16_t(skinJointOf[m.nodeIds[v]]);
         weights[4 * v] = 1.0f;
       }
       std::vector<Vec2> uvs(m.uvs.size());
@@ -378,6 +489,7 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
       }
     }
     for (size_t j = 0; j < joints.size(); ++j) {
+      if (clings(size_t(joints[j]))) continue;  // held at its offset in the host joint's frame
       bool moves = false;
       for (int k = 0; k < frames && !moves; ++k) moves = rot[j][size_t(k) * 4 + 3] < 1.0f - 1e-7f;
       if (!moves) continue;
@@ -462,6 +574,7 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
       stats.morphTargets += size_t(kTargets);
     }
   }
+  for (const auto& [host, climber] : hostChildren) gltf.nodes[size_t(host)].children.push_back(climber);
   gltf.scenes.push_back(std::move(gscene));
   gltf.defaultScene = 0;
   if (!animation.channels.empty()) gltf.animations.push_back(std::move(animation));
@@ -508,10 +621,25 @@ void forEachWindFrame(const std::vector<AnimatedPlant>& plants, const env::WindF
     ms.seed = options.seed + pi;
     motions.emplace_back(*plants[pi].plant, plants[pi].species, ms);
   }
-  std::vector<plant::PlantModel> posed(plants.size());
+  // Climbers follow their hosts, as in the clip (carryWithHosts), posed into copies: WindMotion
+  // rewrites only what moves in `posed`.
+  const bool attached = checkHosts(plants, source);
+  std::vector<std::vector<int32_t>> carriers(plants.size());
+  for (size_t pi = 0; attached && pi < plants.size(); ++pi)
+    if (!plants[pi].hostPlant.empty()) carriers[pi] = clingingCarriers(*plants[pi].plant, plants[pi].hostPlant);
+  std::vector<plant::PlantModel> posed(plants.size()), shown;
   for (int k = 0; k < frames; ++k) {
     for (size_t pi = 0; pi < plants.size(); ++pi) motions[pi].step(float(k) * dt, dt, wind, posed[pi]);
-    frame(k, posed);
+    if (!attached) {
+      frame(k, posed);
+      continue;
+    }
+    shown = posed;
+    for (size_t pi = 0; pi < plants.size(); ++pi)
+      if (!carriers[pi].empty())
+        carryWithHosts(shown[pi], motions[pi], carriers[pi], plants[pi].hostPlant, plants[pi].hostNode,
+                       [&](size_t h) { return HostPose{&motions[h], &posed[h]}; });
+    frame(k, shown);
   }
 }
 

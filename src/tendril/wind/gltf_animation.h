@@ -17,6 +17,15 @@
 // targets apply before skinning: leaves flutter on their swaying branches, and clinging ivy,
 // whose nodes its support holds, flutters in place. Leaves the wind tears off are left out.
 //
+// Climbers on hosts. A plant may cling to other plants (AnimatedPlant::hostPlant / hostNode:
+// plants as supports). A clinging node's vertices are skinned to the host's joint for its host
+// node (the joint chooseJoints gave that node or its nearest ancestor that is one), listed in the
+// climber's skin, so they keep their rest offset in that joint's frame as the host sways. A
+// climber joint on a clinging node is a child of that host joint (at its rest offset, with no
+// channels of its own), so the free shoots beyond it sway on a base that moves with the host.
+// The plants' root joints then hang under one root node ("plants") that every skin shares.
+// Growth clips leave climbers on their own skeletons.
+//
 // With `growth` the clip shows the plants growing as they move (joints scale in, see
 // WindAnimationOptions::growth); it is not meant to loop.
 //
@@ -55,6 +64,9 @@ inline constexpr float kGrowthShare = 0.8f;
 struct AnimatedPlant {
   const plant::PlantModel* plant = nullptr;
   plant::GrowthFlowSpecies species;
+  // Empty, or per node: the plant (index in the clip's list) and node this node clings to, -1
+  // for a free node. A host must not cling to anything itself.
+  std::vector<int32_t> hostPlant = {}, hostNode = {};
 };
 
 struct WindAnimationStats {
@@ -73,7 +85,9 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
 
 // The clip's frames one after the other: calls frame(k, posed) for k = 0 … seconds × fps − 1 with
 // every plant posed at time k / fps (the same sway and leaf motion as the looping clip; frame
-// `frames` would equal frame 0). The posed plants are reused from frame to frame.
+// `frames` would equal frame 0). The posed plants are reused from frame to frame. A climber's
+// clinging nodes, and the free shoots beyond them, are carried by their host nodes' posed
+// motion, as in the clip.
 void forEachWindFrame(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
                       const WindAnimationOptions& options, const std::string& source,
                       const std::function<void(int, const std::vector<plant::PlantModel>&)>& frame);

@@ -804,4 +804,45 @@ void WindMotion::step(float t, float dt, const env::WindField& wind, plant::Plan
   }, 1024);
 }
 
+std::vector<int32_t> clingingCarriers(const plant::PlantModel& rest, const std::vector<int32_t>& hostPlant) {
+  std::vector<int32_t> carrier(rest.nodeCount(), -1);
+  if (hostPlant.size() != rest.nodeCount()) return carrier;
+  for (size_t i = 0; i < rest.nodeCount(); ++i)  // parents come before children
+    carrier[i] = hostPlant[i] >= 0 ? int32_t(i) : rest.parent[i] < 0 ? -1 : carrier[size_t(rest.parent[i])];
+  return carrier;
+}
+
+void carryWithHosts(plant::PlantModel& climber, const WindMotion& own, const std::vector<int32_t>& carriers,
+                    const std::vector<int32_t>& hostPlant, const std::vector<int32_t>& hostNode,
+                    const std::function<HostPose(size_t)>& host) {
+  const size_t n = climber.nodeCount();
+  if (carriers.size() != n || hostPlant.size() != n || hostNode.size() != n) return;
+  // Each carrier's rigid motion: rotation R = Q_h Q_a⁻¹ and where a goes, before any node moves.
+  struct Carry {
+    Quat R = Quat::Identity();
+    Vec3 from = Vec3::Zero(), to = Vec3::Zero();
+    bool moves = false;
+  };
+  std::vector<Carry> carry(n);
+  for (size_t a = 0; a < n; ++a) {
+    if (hostPlant[a] < 0) continue;
+    const HostPose h = host(size_t(hostPlant[a]));
+    const size_t hn = size_t(hostNode[a]);
+    if (!h.motion || !h.posed || hn >= h.posed->nodeCount()) continue;
+    const Quat& Qh = h.motion->nodeRotation(hn);
+    Carry& c = carry[a];
+    c.R = (Qh * own.nodeRotation(a).conjugate()).normalized();
+    c.from = climber.position[a];
+    c.to = Qh * (own.rest().position[a] - h.motion->rest().position[hn]) + h.posed->position[hn];
+    c.moves = true;
+  }
+  parallelFor(size_t(0), n, [&](size_t i) {
+    const int32_t a = carriers[i];
+    if (a < 0 || !carry[size_t(a)].moves) return;
+    const Carry& c = carry[size_t(a)];
+    climber.position[i] = c.to + c.R * (climber.position[i] - c.from);
+    climber.orientation[i] = (c.R * climber.orientation[i]).normalized();
+  }, 1024);
+}
+
 }  // namespace tendril::wind

@@ -63,6 +63,7 @@
 #include "tendril/plant/growth_flow.h"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace tendril::wind {
@@ -253,5 +254,21 @@ namespace detail {
 // bits.
 void setDragLanes(bool on);
 }  // namespace detail
+
+// Climbers on swaying hosts (plants as supports). Per node of a climber: its nearest node at or
+// above it that clings to a host (hostPlant >= 0), or -1.
+std::vector<int32_t> clingingCarriers(const plant::PlantModel& rest, const std::vector<int32_t>& hostPlant);
+// Carries a posed climber with its host: each node whose carrier a clings to host node h is
+// moved by h's posed rigid motion, x ↦ Q_h (x − rest_h) + posed_h, applied to a's rest position,
+// and keeps its pose relative to a turned by Q_h Q_a⁻¹ (Q_a: a's rotation in the climber's own
+// motion `own`, which posed `climber`). `host(h)` gives host plant h's motion and posed plant,
+// or {null, null} for a host that does not sway (its nodes are left as `own` posed them).
+struct HostPose {
+  const WindMotion* motion = nullptr;
+  const plant::PlantModel* posed = nullptr;
+};
+void carryWithHosts(plant::PlantModel& climber, const WindMotion& own, const std::vector<int32_t>& carriers,
+                    const std::vector<int32_t>& hostPlant, const std::vector<int32_t>& hostNode,
+                    const std::function<HostPose(size_t)>& host);
 
 }  // namespace tendril::wind
