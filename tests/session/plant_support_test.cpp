@@ -207,6 +207,29 @@ TEST(PlantSupport, CuttingAHostBranchTakesItsClimbersAndUndoBringsBothBack) {
   EXPECT_EQ(plant::contentHash(session->plants()), hashBefore);
 }
 
+TEST(PlantSupport, ParticleIvyAndAnLSystemVineClimbTreesToo) {
+  // Climbers of the other two models: particle ivy (seed 000) at the chestnut's trunk, and the
+  // built-in ivy grammar, whose ?E probes see the stems, at a graph pine's trunk.
+  auto session = makeSession(chestnutScene(true, 700, R"(
+      {"name": "particle-ivy", "model": "particles", "species": "ivy-particles", "position": [0.345, 0.03, 0], "seed": 1},
+      {"name": "pine", "model": "graph", "graph": "examples/graphs/pine.json", "position": [6, 0, 0], "support": true},
+      {"name": "vine", "model": "lsystem", "grammar": "japanese-ivy", "derivation_length": 150,
+       "position": [6.2, 0, 0], "seed": 2})"));
+  session->run(700);
+  const auto plants = session->plants();
+  ASSERT_EQ(plants.size(), 4u);
+  // Systems: graph 0 (both trees), particles 1, lsystem 2.
+  const OnHost particles = measure(*session, plants[1], 1, "particle ivy on a graph chestnut");
+  EXPECT_GT(plant::computeStats(plants[1]).bounds.max.y(), 1.5f);
+  EXPECT_EQ(particles.crossings, 0u);
+  EXPECT_EQ(particles.inside, 0u);
+  ASSERT_GT(particles.high, 50u);
+  EXPECT_GE(double(particles.highOnStem), 0.9 * double(particles.high));
+  const OnHost vine = measure(*session, plants[3], 2, "L-system vine on a graph pine");
+  EXPECT_GT(plant::computeStats(plants[3]).bounds.max.y(), 2.0f);
+  expectClimbsHost(vine, 200);
+}
+
 TEST(PlantSupport, TheSameAtEveryThreadCount) {
   sameAtEveryThreadCount([&] {
     auto session = makeSession(chestnutScene(true, 40, kIvyAtTrunk));
