@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <set>
 #include <variant>
 #include <vector>
@@ -92,21 +93,31 @@ struct Cover {
 
 // The column (radius 0.25 m, 3 m high at the origin): 12 sectors around it by 12 bands of
 // 0.25 m, a cell covered where a stem particle lies within 8 cm of the surface.
-Cover columnCover(const ParticleWorld& w) {
+// Every stem particle of every plant: the highest one, and the cells `cellOf` puts them in
+// (those it returns nothing for lie off the surface).
+template <class CellOf>
+std::set<std::pair<int, int>> stemCells(const ParticleWorld& w, Cover& c, CellOf cellOf) {
   std::set<std::pair<int, int>> hit;
-  Cover c;
   for (uint32_t p = 0; p < w.plantCount(); ++p)
     for (uint32_t i = 0; i < w.capacity(); ++i) {
       if (!isStem(w, i, p)) continue;
       const Vec3& x = w.position(i);
       c.top = std::max(c.top, x.y());
-      if (std::abs(std::hypot(x.x(), x.z()) - 0.25f) > 0.08f || x.y() < 0 || x.y() >= 3) continue;
-      const int sector = int((std::atan2(x.z(), x.x()) + kPi) / (2 * kPi) * 12) % 12;
-      hit.insert({sector, int(x.y() / 0.25f)});
+      if (const std::optional<std::pair<int, int>> cell = cellOf(x)) hit.insert(*cell);
     }
+  c.particles = w.particleCount();
+  return hit;
+}
+
+Cover columnCover(const ParticleWorld& w) {
+  Cover c;
+  const auto hit = stemCells(w, c, [](const Vec3& x) -> std::optional<std::pair<int, int>> {
+    if (std::abs(std::hypot(x.x(), x.z()) - 0.25f) > 0.08f || x.y() < 0 || x.y() >= 3) return std::nullopt;
+    const int sector = int((std::atan2(x.z(), x.x()) + kPi) / (2 * kPi) * 12) % 12;
+    return std::pair{sector, int(x.y() / 0.25f)};
+  });
   c.covered = hit.size();
   c.cells = 12 * 12;
-  c.particles = w.particleCount();
   return c;
 }
 
@@ -133,24 +144,19 @@ Cover facadeCover(const ParticleWorld& w, size_t* columnsReached) {
       if (std::abs(x - wx) < 0.5f && std::abs(y - 1.6f) < 0.6f) return true;
     return false;
   };
-  std::set<std::pair<int, int>> hit;
   Cover c;
-  for (uint32_t p = 0; p < w.plantCount(); ++p)
-    for (uint32_t i = 0; i < w.capacity(); ++i) {
-      if (!isStem(w, i, p)) continue;
-      const Vec3& x = w.position(i);
-      c.top = std::max(c.top, x.y());
-      if (std::abs(x.z() - 0.15f) > 0.1f || x.x() < -5 || x.x() >= 5 || x.y() < 0 || x.y() >= 2.5f) continue;
-      const int cx = int((x.x() + 5.0f) / 0.25f), cy = int(x.y() / 0.25f);
-      if (!isWindow(cx, cy)) hit.insert({cx, cy});
-    }
+  const auto hit = stemCells(w, c, [&](const Vec3& x) -> std::optional<std::pair<int, int>> {
+    if (std::abs(x.z() - 0.15f) > 0.1f || x.x() < -5 || x.x() >= 5 || x.y() < 0 || x.y() >= 2.5f) return std::nullopt;
+    const int cx = int((x.x() + 5.0f) / 0.25f), cy = int(x.y() / 0.25f);
+    if (isWindow(cx, cy)) return std::nullopt;
+    return std::pair{cx, cy};
+  });
   for (int cx = 0; cx < 40; ++cx)
     for (int cy = 0; cy < 10; ++cy) c.cells += !isWindow(cx, cy);
   std::set<int> columns;
   for (const auto& [cx, cy] : hit) columns.insert(cx);
   *columnsReached = columns.size();
   c.covered = hit.size();
-  c.particles = w.particleCount();
   return c;
 }
 
