@@ -309,7 +309,7 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   const env::SurfacePoint* support = tip.support ? &*tip.support : nullptr;  // (t.support changes below)
   std::optional<env::SurfacePoint> filtered;
   if (support && support->away.dot(t.dir) > cosRelease) {
-    filtered = env.closestPointFacing(t.position, s.adhesionDistance, t.dir, cosRelease);
+    filtered = env.closestPointFacing(t.position, s.adhesionDistance, t.dir, cosRelease, support);
     support = filtered ? &*filtered : nullptr;
   }
   const bool climbing = support != nullptr;

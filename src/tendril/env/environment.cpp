@@ -481,7 +481,7 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
   // One occlusion ray per segment, stopping at the first blocked one. On the climbing bench a
   // single ray along a leaf edge costs 420-470 instructions in Embree, a lane of an 8-wide
   // packet (rtcOccluded8) 620-710: the segments of one leaf point in too many directions for
-  // the packet to share its traversal.
+  // the packet to share its traversal. Stems are tested after all of them, together.
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRay ray;
@@ -489,12 +489,17 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
   ray.mask = 0xffffffffu;
   ray.id = 0;
   ray.flags = 0;
+  bool regular = true;  // every segment finite and not absurdly far out
   for (size_t i = 0; i < n; ++i) {
     Vec3 d = to[i] - from[i];
     float len = d.norm();
     if (!(len > 0.0f)) continue;
     d /= len;
-    if (!rayAccepted(from[i], d, 0.0f, len)) continue;
+    if (!rayAccepted(from[i], d, 0.0f, len)) {
+      regular = false;
+      continue;
+    }
+    if (obstacles_.empty()) continue;
     ray.org_x = from[i].x();
     ray.org_y = from[i].y();
     ray.org_z = from[i].z();
@@ -503,11 +508,17 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
     ray.dir_z = d.z();
     ray.tnear = 0.0f;
     ray.tfar = len;
-    if (!obstacles_.empty()) {
-      rtcOccluded1(static_cast<RTCScene>(scene_), &ctx, &ray);
-      if (ray.tfar < 0.0f) return true;  // Embree sets tfar = -inf on a hit
-    }
-    if (!stemLayers_.empty() && stemOccluded(from[i], d, 0.0f, len, false)) return true;
+    rtcOccluded1(static_cast<RTCScene>(scene_), &ctx, &ray);
+    if (ray.tfar < 0.0f) return true;  // Embree sets tfar = -inf on a hit
+  }
+  if (stemLayers_.empty()) return false;
+  if (regular) return stemSegmentsBlocked(from, to, n);
+  for (size_t i = 0; i < n; ++i) {
+    Vec3 d = to[i] - from[i];
+    float len = d.norm();
+    if (!(len > 0.0f)) continue;
+    d /= len;
+    if (rayAccepted(from[i], d, 0.0f, len) && stemOccluded(from[i], d, 0.0f, len, false)) return true;
   }
   return false;
 }
@@ -537,8 +548,8 @@ std::optional<SurfacePoint> Environment::closestPoint(const Vec3& p, float radiu
 }
 
 std::optional<SurfacePoint> Environment::closestPointFacing(const Vec3& p, float radius, const Vec3& direction,
-                                                            float cosLimit) const {
-  return closest(p, radius, &direction, cosLimit);
+                                                            float cosLimit, const SurfacePoint* hint) const {
+  return closest(p, radius, &direction, cosLimit, hint);
 }
 
 std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, const Vec3* direction,
@@ -548,7 +559,7 @@ std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, co
   if (!obstacles_.empty()) best = closestObstacle(p, radius, direction, cosLimit, hint);
   if (!stemLayers_.empty()) {
     SurfacePoint sp;
-    if (closestStem(p, best ? best->distance : radius, direction, cosLimit, &sp)) best = sp;
+    if (closestStem(p, best ? best->distance : radius, direction, cosLimit, &sp, nullptr, hint)) best = sp;
   }
   return best;
 }

@@ -201,8 +201,10 @@ class Environment {
   // First hit along origin + t·dir for t in [tMin, tMax] (dir unit length).
   std::optional<RayHit> rayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin = 0.0f) const;
   bool occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin = 0.0f) const;
-  // True if any of the n segments from[i]–to[i] touches an obstacle: one occlusion ray per
-  // segment (no hit point is computed), stopping at the first that is blocked.
+  // True if any of the n segments from[i]–to[i] touches an obstacle (one occlusion ray per
+  // segment, no hit point computed, stopping at the first that is blocked) or a seen stem
+  // (passes through it or lies in it; segments close together, such as a leaf's outline, are
+  // tested against the few tubes near them all).
   bool anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) const;
   // Number of surface crossings on the segment a-b (0 = the segment touches no obstacle).
   size_t countSegmentHits(const Vec3& a, const Vec3& b) const;
@@ -213,9 +215,10 @@ class Environment {
   // fine meshes; the answer is exactly that of closestPoint(p, radius).
   std::optional<SurfacePoint> closestPoint(const Vec3& p, float radius, const SurfacePoint* hint) const;
   // The same, ignoring triangles that face `direction`: those whose normal (turned toward p)
-  // has n·direction > cosLimit. A shoot growing away from a surface is not held by it.
+  // has n·direction > cosLimit. A shoot growing away from a surface is not held by it. A hint
+  // (as above) speeds up the search among plants' stems only.
   std::optional<SurfacePoint> closestPointFacing(const Vec3& p, float radius, const Vec3& direction,
-                                                 float cosLimit) const;
+                                                 float cosLimit, const SurfacePoint* hint = nullptr) const;
   // Exact signed distance (negative inside closed obstacles) from the closest point and the
   // angle-weighted pseudonormal; +maxDistance when nothing is that close.
   float exactSignedDistance(const Vec3& p, float maxDistance) const;
@@ -262,13 +265,18 @@ class Environment {
   bool seesLayer(const StemLayer& layer) const;
   void commitStems();
   // The stem surface nearest p with sign (inside a tube counts as nearer than any outside
-  // surface) if its signed distance is below `radius`: into `best` and `signedDistance`.
+  // surface) if its signed distance is below `radius`: into `best` and `signedDistance`. A
+  // `hint` on a stem (a nearby answer) makes the search quicker, not different.
   bool closestStem(const Vec3& p, float radius, const Vec3* direction, float cosLimit, SurfacePoint* best,
-                   float* signedDistance = nullptr) const;
+                   float* signedDistance = nullptr, const SurfacePoint* hint = nullptr) const;
   // The first stem hit closer than *tMax (then lowered to it), into `hit`.
   bool stemRayCast(const Vec3& origin, const Vec3& dir, float tMin, RayHit* hit, float* tMax) const;
   // Whether a seen stem (or, with `shade`, a seen leaf) blocks the ray.
   bool stemOccluded(const Vec3& origin, const Vec3& dir, float tMin, float tMax, bool shade) const;
+  bool layerOccluded(const StemLayer& layer, const Vec3& origin, const Vec3& dir, float tMin, float tMax,
+                     bool shade) const;
+  // Whether a seen stem touches any of the n segments from[i]-to[i] (anySegmentBlocked).
+  bool stemSegmentsBlocked(const Vec3* from, const Vec3* to, size_t n) const;
   // With at most kSmallSceneTriangles triangles in all, every triangle's world box (by obstacle,
   // then triangle): closest-point queries test them in turn instead of traversing Embree's BVH.
   // The boxes are kept coordinate by coordinate, so the distances to all of them are found

@@ -22,40 +22,115 @@ namespace {
 constexpr float kOnSurface = 1e-5f;
 }  // namespace
 
-TubePoint closestOnTube(const StemTube& t, const Vec3& p) {
-  // Distance to the union of balls c(s), r(s) along the axis, s in [0, L]: the minimum over s
-  // of |p − c(s)| − r(s), a convex function of s whose minimiser has a closed form.
+TubeShape::TubeShape(const StemTube& t) : a(t.a), r(t.ra) {
+  // The distance to the union of balls c(s), r(s) along the axis, s in [0, L], is the minimum
+  // over s of |p − c(s)| − r(s), a convex function of s whose minimiser has a closed form; what
+  // does not depend on p is worked out here, once per tube.
   const Vec3 axis = t.b - t.a;
-  const float length = axis.norm();
-  Vec3 c = t.a;
-  float r = t.ra;
-  Vec3 u = Vec3::UnitY();
-  if (length > 1e-9f) {
-    u = axis / length;
-    const float k = (t.rb - t.ra) / length;
-    if (std::fabs(k) >= 1.0f) {
+  const float len = axis.norm();
+  if (len > 1e-9f) {
+    u = axis / len;
+    const float slope = (t.rb - t.ra) / len;
+    if (std::fabs(slope) >= 1.0f) {
       // One ball holds the other: the tube is the larger ball.
-      if (t.rb > t.ra) c = t.b, r = t.rb;
+      if (t.rb > t.ra) a = t.b, r = t.rb;
     } else {
-      const Vec3 w = p - t.a;
-      const float x = w.dot(u);
-      const float y = (w - x * u).norm();
-      const float s = std::clamp(x + k * y / std::sqrt(1.0f - k * k), 0.0f, length);
-      c = t.a + s * u;
-      r = t.ra + k * s;
+      length = len;
+      k = slope;
+      root = std::sqrt(1.0f - k * k);
     }
   } else {
     r = std::max(t.ra, t.rb);
   }
+  rMax = std::max(r, length > 0.0f ? r + k * length : r);
+}
+
+TubePoint TubeShape::closest(const Vec3& p) const {
+  Vec3 c = a;
+  float rc = r;
+  if (length > 0.0f) {
+    const Vec3 w = p - a;
+    const float x = w.dot(u);
+    const float y = (w - x * u).norm();
+    const float s = std::clamp(x + k * y / root, 0.0f, length);
+    c = a + s * u;
+    rc = r + k * s;
+  }
   Vec3 d = p - c;
   const float n = d.norm();
-  Vec3 dir;
-  if (n > 1e-9f) {
-    dir = d / n;
-  } else {
-    dir = anyPerpendicular(u);
+  const Vec3 dir = n > 1e-9f ? Vec3(d / n) : anyPerpendicular(u);
+  return {c + rc * dir, dir, n - rc};
+}
+
+float TubeShape::lowerBound2(const Vec3& p, float best) const {
+  // |p − axis| − rMax bounds the signed distance from below; as a square, with a margin of
+  // round-off, for the callers' quick rejection. Negative: no bound.
+  const float limit = best + rMax;
+  if (limit < 0.0f) return -1.0f;
+  const Vec3 w = p - a;
+  const float x = std::clamp(w.dot(u), 0.0f, length);
+  const float d2 = (w - x * u).squaredNorm();
+  const float m = limit * 1.0001f + 1e-6f;
+  return d2 - m * m;
+}
+
+TubePoint closestOnTube(const StemTube& t, const Vec3& p) { return TubeShape(t).closest(p); }
+
+namespace {
+
+// The parameters (s on p0-p1, t on q0-q1, both in [0, 1]) of the closest points of two
+// segments, by minimising the squared distance over the square, edges taken in turn.
+std::pair<float, float> closestParameters(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const float a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  constexpr float kTiny = 1e-20f;
+  if (a <= kTiny && e <= kTiny) return {0.0f, 0.0f};
+  if (a <= kTiny) return {0.0f, std::clamp(f / e, 0.0f, 1.0f)};
+  const float c = d1.dot(r);
+  if (e <= kTiny) return {std::clamp(-c / a, 0.0f, 1.0f), 0.0f};
+  const float b = d1.dot(d2), denom = a * e - b * b;
+  float sp = denom > kTiny * a * e ? std::clamp((b * f - c * e) / denom, 0.0f, 1.0f) : 0.0f;
+  float tq = (b * sp + f) / e;
+  if (tq < 0.0f) {
+    tq = 0.0f;
+    sp = std::clamp(-c / a, 0.0f, 1.0f);
+  } else if (tq > 1.0f) {
+    tq = 1.0f;
+    sp = std::clamp((b - c) / a, 0.0f, 1.0f);
   }
-  return {c + r * dir, dir, n - r};
+  return {sp, tq};
+}
+
+}  // namespace
+
+bool TubeShape::meets(const Vec3& p, const Vec3& q) const {
+  // The tube holds the capsule of its smallest radius round its axis and lies in the capsule
+  // of its largest: the distance between the segment and the axis decides, except between
+  // the two radii (a tapering tube, met near its thinner end), where the signed distance along
+  // the segment, a convex function, is minimised by golden-section search.
+  const Vec3 axisEnd = a + length * u;
+  const auto [sp, tq] = closestParameters(p, q, a, axisEnd);
+  const float d = (p + sp * (q - p) - (a + tq * (axisEnd - a))).norm();
+  const float rMin = length > 0.0f ? std::min(r, r + k * length) : r;
+  if (d > rMax) return false;
+  if (d <= rMin) return true;
+  constexpr float kInvPhi = 0.618034f;
+  float lo = 0.0f, hi = 1.0f;
+  float x1 = hi - kInvPhi * (hi - lo), x2 = lo + kInvPhi * (hi - lo);
+  float f1 = closest(p + x1 * (q - p)).distance, f2 = closest(p + x2 * (q - p)).distance;
+  for (int i = 0; i < 40; ++i) {
+    if (f1 <= 0.0f || f2 <= 0.0f) return true;
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1;
+      x1 = hi - kInvPhi * (hi - lo);
+      f1 = closest(p + x1 * (q - p)).distance;
+    } else {
+      lo = x1, x1 = x2, f1 = f2;
+      x2 = lo + kInvPhi * (hi - lo);
+      f2 = closest(p + x2 * (q - p)).distance;
+    }
+  }
+  return f1 <= 0.0f || f2 <= 0.0f || closest(p).distance <= 0.0f || closest(q).distance <= 0.0f;
 }
 
 namespace {
@@ -78,32 +153,39 @@ bool validTube(const StemTube& t) {
 // The tube whose surface is nearest with sign: the smallest signed distance, so a point inside
 // one tube and just outside another is inside the union (stems overlap at their joints).
 struct StemSearch {
-  const StemTube* tubes;
+  const TubeShape* shapes;
   Vec3 p;
   const Vec3* facing;
   float cosLimit;
   float best;  // signed distance of the best so far
   uint32_t bestTube = std::numeric_limits<uint32_t>::max();
   TubePoint bestPoint{};
+
+  // Whether tube i is nearer than the best so far (and faces the right way): then it is the best.
+  bool offer(uint32_t i) {
+    const TubeShape& shape = shapes[i];
+    if (shape.lowerBound2(p, best) > 0.0f) return false;
+    const TubePoint tp = shape.closest(p);
+    if (facing) {
+      const Vec3 towardP = tp.distance < 0.0f ? Vec3(-tp.normal) : tp.normal;
+      if (towardP.dot(*facing) > cosLimit) return false;
+    }
+    // Ties go to the lower tube index, so the answer never depends on traversal order.
+    if (!(tp.distance < best || (tp.distance == best && i < bestTube))) return false;
+    best = tp.distance;
+    bestTube = i;
+    bestPoint = tp;
+    return true;
+  }
 };
 
 bool stemCallback(RTCPointQueryFunctionArguments* args) {
   auto* s = static_cast<StemSearch*>(args->userPtr);
-  const TubePoint tp = closestOnTube(s->tubes[args->primID], s->p);
-  if (s->facing) {
-    const Vec3 towardP = tp.distance < 0.0f ? Vec3(-tp.normal) : tp.normal;
-    if (towardP.dot(*s->facing) > s->cosLimit) return false;
-  }
-  // Ties go to the lower tube index, so the answer never depends on traversal order.
-  if (tp.distance < s->best || (tp.distance == s->best && args->primID < s->bestTube)) {
-    s->best = tp.distance;
-    s->bestTube = args->primID;
-    s->bestPoint = tp;
-    const float r = std::max(tp.distance, 0.0f);
-    if (r < args->query->radius) {
-      args->query->radius = r;
-      return true;
-    }
+  if (!s->offer(args->primID)) return false;
+  const float r = std::max(s->best, 0.0f);
+  if (r < args->query->radius) {
+    args->query->radius = r;
+    return true;
   }
   return false;
 }
@@ -207,6 +289,8 @@ void Environment::commitStems() {
       rtcReleaseGeometry(u);
       rtcCommitScene(l.points);
     }
+    l.shapes.clear();
+    for (const StemTube& t : l.tubes) l.shapes.emplace_back(t);
     if (!l.shade.empty()) {
       // Shade needs no robust traversal: a shadow ray slipping between two leaves' edges is light.
       l.shadeScene = rtcNewScene(device);
@@ -260,35 +344,106 @@ bool Environment::stemRayCast(const Vec3& origin, const Vec3& dir, float tMin, R
   return found;
 }
 
-bool Environment::stemOccluded(const Vec3& origin, const Vec3& dir, float tMin, float tMax, bool shade) const {
+bool Environment::layerOccluded(const StemLayer& l, const Vec3& origin, const Vec3& dir, float tMin, float tMax,
+                                bool shade) const {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
+  for (RTCScene s : {l.rays, shade ? l.shadeScene : nullptr}) {
+    if (!s) continue;
+    RTCRay ray;
+    initRay(ray, origin, dir, tMin, tMax);
+    rtcOccluded1(s, &ctx, &ray);
+    if (ray.tfar < 0.0f) return true;  // Embree sets tfar = -inf on a hit
+  }
+  return false;
+}
+
+bool Environment::stemOccluded(const Vec3& origin, const Vec3& dir, float tMin, float tMax, bool shade) const {
+  for (const auto& lp : stemLayers_)
+    if (seesLayer(*lp) && layerOccluded(*lp, origin, dir, tMin, tMax, shade)) return true;
+  return false;
+}
+
+namespace {
+
+// The tubes that may come within `radius` of a point (a point query that never shrinks).
+struct StemGather {
+  const TubeShape* shapes;
+  Vec3 centre;
+  float radius;
+  static constexpr size_t kMax = 48;
+  uint32_t found[kMax];
+  size_t count = 0;
+  bool overflow = false;
+};
+
+bool gatherCallback(RTCPointQueryFunctionArguments* args) {
+  auto* g = static_cast<StemGather*>(args->userPtr);
+  if (g->shapes[args->primID].lowerBound2(g->centre, g->radius) > 0.0f) return false;
+  if (g->count == StemGather::kMax) g->overflow = true;
+  else g->found[g->count++] = args->primID;
+  return false;
+}
+
+}  // namespace
+
+bool Environment::stemSegmentsBlocked(const Vec3* from, const Vec3* to, size_t n) const {
+  if (n == 0) return false;
+  // Short segments near each other (a leaf's outline): the few tubes near all of them are
+  // found with one point query and each segment is tested against those, instead of a ray
+  // per segment through every tube's hierarchy. Too many tubes near: rays after all.
+  Vec3 lo = from[0].cwiseMin(to[0]), hi = from[0].cwiseMax(to[0]);
+  for (size_t i = 1; i < n; ++i) lo = lo.cwiseMin(from[i].cwiseMin(to[i])), hi = hi.cwiseMax(from[i].cwiseMax(to[i]));
+  const Vec3 centre = 0.5f * (lo + hi);
+  const float radius = 0.5f * (hi - lo).norm();
   for (const auto& lp : stemLayers_) {
     const StemLayer& l = *lp;
-    if (!seesLayer(l)) continue;
-    for (RTCScene s : {l.rays, shade ? l.shadeScene : nullptr}) {
-      if (!s) continue;
-      RTCRay ray;
-      initRay(ray, origin, dir, tMin, tMax);
-      rtcOccluded1(s, &ctx, &ray);
-      if (ray.tfar < 0.0f) return true;  // Embree sets tfar = -inf on a hit
+    if (!l.points || !seesLayer(l)) continue;
+    StemGather g{l.shapes.data(), centre, radius};
+    RTCPointQuery q;
+    q.x = centre.x(), q.y = centre.y(), q.z = centre.z();
+    q.time = 0.0f;
+    q.radius = radius;
+    RTCPointQueryContext ctx;
+    rtcInitPointQueryContext(&ctx);
+    rtcPointQuery(l.points, &q, &ctx, gatherCallback, &g);
+    if (g.count == 0) continue;
+    for (size_t i = 0; i < n; ++i) {
+      if (g.overflow) {
+        Vec3 d = to[i] - from[i];
+        const float len = d.norm();
+        if (len > 0.0f && layerOccluded(l, from[i], d / len, 0.0f, len, false)) return true;
+        continue;
+      }
+      for (size_t c = 0; c < g.count; ++c)
+        if (l.shapes[g.found[c]].meets(from[i], to[i])) return true;
     }
   }
   return false;
 }
 
 bool Environment::closestStem(const Vec3& p, float radius, const Vec3* direction, float cosLimit,
-                              SurfacePoint* best, float* signedDistance) const {
+                              SurfacePoint* best, float* signedDistance, const SurfacePoint* hint) const {
   bool found = false;
   float bound = radius;  // signed distance to beat
-  for (const auto& lp : stemLayers_) {
-    const StemLayer& l = *lp;
+  // The hinted stem (where the caller found a surface last) and its neighbours in the host's
+  // node order start the search: the sphere Embree searches is then about as small as the
+  // answer's distance from the start. The answer is the same without them.
+  const std::pair<uint32_t, uint32_t> hinted = hint && hint->onStem() && hint->stem() < stemIndex_.size()
+                                                   ? stemIndex_[hint->stem()]
+                                                   : std::pair<uint32_t, uint32_t>(~0u, 0);
+  for (uint32_t li = 0; li < stemLayers_.size(); ++li) {
+    const StemLayer& l = *stemLayers_[li];
     if (!l.points || !seesLayer(l)) continue;
-    StemSearch s{l.tubes.data(), p, direction, cosLimit, bound};
+    StemSearch s{l.shapes.data(), p, direction, cosLimit, bound};
+    if (li == hinted.first) {
+      const uint32_t t = hinted.second, n = uint32_t(l.shapes.size());
+      for (uint32_t i = t > 0 ? t - 1 : 0; i <= t + 1 && i < n; ++i) s.offer(i);
+    }
     RTCPointQuery q;
     q.x = p.x(), q.y = p.y(), q.z = p.z();
     q.time = 0.0f;
-    q.radius = std::max(bound, 0.0f);
+    q.radius = std::max(s.best, 0.0f);
     RTCPointQueryContext ctx;
     rtcInitPointQueryContext(&ctx);
     rtcPointQuery(l.points, &q, &ctx, stemCallback, &s);
