@@ -277,7 +277,7 @@ Fig7 replayFig7(bool wind) {
     }
     if (std::holds_alternative<session::DragEnd>(t.edit)) f.toSecondTarget[1] = (w->position(f.dragged) - target).norm();
     if (const auto* e = std::get_if<session::Cut>(&t.edit)) {
-      f.cutParticle = w->snapshotParticles(e->plant).at(e->node);
+      f.cutParticle = e->particle != session::Cut::kByNode ? e->particle : w->snapshotParticles(e->plant).at(e->node);
       f.stemsBeforeCut = stemCount(*w, 0);
       f.cutOff = descendants(*w, f.cutParticle);
       f.stemsBeyondCut = f.cutOff.size();

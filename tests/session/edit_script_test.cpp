@@ -53,6 +53,13 @@ TEST(EditScript, ErrorsNameTheFileAndPointer) {
                            "nodes": 2}]})")
                 .find("edits.json:/edits/0/nodes"),
             std::string::npos);
+  EXPECT_NE(scriptError(R"({"tendril_edits": 1, "edits": [{"at_step": 0, "edit": "cut", "plant": 0, "node": 1,
+                           "particle": 2}]})")
+                .find("edits.json:/edits/0/particle"),
+            std::string::npos);
+  EXPECT_NE(scriptError(R"({"tendril_edits": 1, "edits": [{"at_step": 0, "edit": "cut", "plant": 0}]})")
+                .find("edits.json:/edits/0/node"),
+            std::string::npos);
   EXPECT_NE(scriptError(R"({"tendril_edits": 1, "edits": [{"at_step": 5, "edit": "undo"},
                                                           {"at_step": 2, "edit": "redo"}]})")
                 .find("edits.json:/edits/1/at_step"),

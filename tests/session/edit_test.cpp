@@ -141,6 +141,27 @@ TEST_F(EditFixture, CutParticleAndClimbingPlants) {
   EXPECT_THROW(editor->apply(Cut{7, 0}), Error);
 }
 
+TEST_F(EditFixture, CutByParticleIsTheCutAtTheNodeHoldingIt) {
+  // A particle plant cut by handle cuts where a cut by that handle's node cuts; the journal
+  // keeps the handle. Climbing plants have no handles; a handle that is not a segment is an error.
+  const std::vector<uint32_t> handles = session->system(0).grip()->nodeHandles(0);
+  ASSERT_GT(handles.size(), 4u);
+  const uint32_t node = uint32_t(handles.size() / 2);
+  const uint64_t before = session->stateHash();
+  editor->apply(Cut{0, node});
+  const uint64_t byNode = session->stateHash();
+  editor->undo();
+  ASSERT_EQ(session->stateHash(), before);
+  Cut byHandle{0, 0, handles[node]};
+  editor->apply(byHandle);
+  EXPECT_EQ(session->stateHash(), byNode);
+  EXPECT_NE(byNode, before);
+  EXPECT_EQ(editToJson(byHandle).value("particle", 0u), handles[node]);
+  EXPECT_FALSE(editToJson(byHandle).contains("node"));
+  EXPECT_THROW(editor->apply(Cut{1, 0, 0}), Error);        // plant 1 is a climbing plant
+  EXPECT_THROW(editor->apply(Cut{0, 0, 1u << 30}), Error);  // no such particle
+}
+
 TEST_F(EditFixture, DragGestureIsOneUndoEntry) {
   const uint32_t p = grownParticle(*session);
   ASSERT_NE(p, particles::kNone);

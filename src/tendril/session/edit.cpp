@@ -157,8 +157,19 @@ void EditApplier::operator()(const SeedBranch& e) const {
   b.seedBranch(s.indexInSystem(e.plant), e.particle, e.direction, "seed_branch");
 }
 
-void EditApplier::operator()(const Cut& e) const {
-  requirePlant(s, e.plant, "cut");
+void EditApplier::operator()(const Cut& edit) const {
+  requirePlant(s, edit.plant, "cut");
+  Cut e = edit;
+  if (e.particle != Cut::kByNode) {
+    const models::Grip& g = capability(s, e.plant, &models::PlantSystem::grip, "cut");
+    g.requireHandle(s.indexInSystem(e.plant), e.particle, "cut");
+    const std::vector<uint32_t> handles = g.nodeHandles(s.indexInSystem(e.plant));
+    const auto at = std::find(handles.begin(), handles.end(), e.particle);
+    if (at == handles.end())
+      throw Error("cut", "/particle", fmt::format("plant {}: particle {} is not a segment of the plant", e.plant,
+                                                  e.particle));
+    e.node = uint32_t(at - handles.begin());
+  }
   // A support plant's cut branch takes what clings to it: found before the cut, while the
   // environment still holds the branch's stems.
   std::vector<bool> removed;
@@ -390,7 +401,11 @@ Json editToJson(const Edit& edit) {
                  [&](const SeedBranch& e) {
                    j["plant"] = e.plant, j["particle"] = e.particle, j["direction"] = vec3Json(e.direction);
                  },
-                 [&](const Cut& e) { j["plant"] = e.plant, j["node"] = e.node; },
+                 [&](const Cut& e) {
+                   j["plant"] = e.plant;
+                   if (e.particle != Cut::kByNode) j["particle"] = e.particle;
+                   else j["node"] = e.node;
+                 },
                  [&](const DragBegin& e) {
                    j["plant"] = e.plant, j["particle"] = e.particle, j["target"] = vec3Json(e.target);
                    j["strength"] = e.strength;
@@ -467,7 +482,10 @@ Edit readEdit(JsonObject& o) {
   if (kind == "cut") {
     Cut e;
     e.plant = readIndex(o, "plant");
-    e.node = readIndex(o, "node");
+    if (o.has("particle") == o.has("node"))
+      throw o.error(o.has("node") ? "particle" : "node", "a cut takes either \"node\" or \"particle\", not both or neither");
+    if (o.has("particle")) e.particle = readIndex(o, "particle");
+    else e.node = readIndex(o, "node");
     return e;
   }
   if (kind == "drag_begin") {

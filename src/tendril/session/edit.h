@@ -53,10 +53,15 @@ struct SeedBranch {
 
 // Cuts a plant at one of its segments: the segment and everything beyond it go. Particle
 // plants: the piece falls and disappears (ParticleWorld::cut). Climbing plants: the subtree
-// is removed at once (its tips die with it). Other models cannot be cut (Error).
+// is removed at once (its tips die with it). Other models cannot be cut (Error). The segment
+// is a node of the plant's snapshot or, on plants whose parts have handles (particle plants),
+// the node holding a handle: handles keep their number while the plant grows on, node indices
+// follow the snapshot's order, so scripts written for a later step say `particle`.
 struct Cut {
+  static constexpr uint32_t kByNode = std::numeric_limits<uint32_t>::max();
   uint32_t plant = 0;
-  uint32_t node = 0;  // node index in the plant's snapshot (NodePick::node)
+  uint32_t node = 0;             // node index in the plant's snapshot (NodePick::node)
+  uint32_t particle = kByNode;   // or: the node holding this handle (NodePick::particle)
 };
 
 // A drag gesture on a particle plant through a soft constraint (§5.1): begin, any number of
