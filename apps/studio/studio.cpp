@@ -107,7 +107,6 @@ void Studio::Impl::openFile(const std::filesystem::path& path) {
   selection = {};
   gesture = {};
   dragPlant.reset();
-  strainAtDragStart.clear();
   script.reset();  // a script replays on the session it was started with
   nextScriptEdit = 0;
   lsystemPanel.close();
@@ -559,16 +558,15 @@ void Studio::Impl::endGesture(const Vec2& pixel) {
   }
 }
 
-// Stress colours of the plant being dragged (seed 000 fig. 6): the strain of each segment's
-// connection to its parent as the model's breaking rule measures it (models::StrainGauge, as a
-// fraction of the strain at which it breaks), minus what it was when the drag began (growth
-// alone leaves connections strained, and that is not the drag's doing), so that red is where
-// the drag brings a connection to breaking.
+// Stress colours of the plant being dragged (seed 000 fig. 6): exactly the strain breaking
+// compares with its threshold — each segment's connection to its parent as the model's breaking
+// rule measures it (models::StrainGauge, as a fraction of the strain at which it breaks), so
+// red is where a connection breaks. Strain growth left before the drag shows too: breaking
+// counts it just the same.
 void Studio::Impl::updateStress() {
   if (!editor->dragging() || !dragPlant) {
     if (dragPlant) view.setStress(*dragPlant, {});
     dragPlant.reset();
-    strainAtDragStart.clear();
     return;
   }
   const uint32_t plant = *dragPlant;
@@ -577,18 +575,11 @@ void Studio::Impl::updateStress() {
   const models::StrainGauge* gauge = std::as_const(session->system(plant)).strainGauge();
   if (!gauge) return;
   const std::vector<models::StrainGauge::NodeStrain> strain = gauge->nodeStrain(session->indexInSystem(plant));
-  const bool first = strainAtDragStart.empty();
   std::vector<float> stress(plants[plant].nodeCount(), 0.0f);
   for (size_t n = 0; n < strain.size() && n < stress.size(); ++n) {
     const models::StrainGauge::NodeStrain& s = strain[n];
     if (s.handle == models::kNoHandle) continue;
-    if (first) {
-      strainAtDragStart[s.handle] = s.strain;
-      continue;
-    }
-    auto before = strainAtDragStart.find(s.handle);
-    if (before == strainAtDragStart.end()) continue;  // grew during the drag
-    stress[n] = std::clamp(s.strain - before->second, 0.0f, 1.0f);
+    stress[n] = std::clamp(s.strain, 0.0f, 1.0f);
   }
   view.setStress(plant, std::move(stress));
 }

@@ -118,7 +118,6 @@ struct Studio::Impl {
   Tool tool = Tool::View;
   Gesture gesture;
   std::optional<uint32_t> dragPlant;  // the plant of the drag under way (interactive or scripted)
-  std::unordered_map<uint32_t, float> strainAtDragStart;  // held part (models::Grip handle) → strain when it began
   bool playing = true;
   bool showAir = true;  // the simulated air's streaks (wind mode sph)
   bool sway = true;     // plants sway and their leaves move in the wind (wind panel)
