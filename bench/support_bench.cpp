@@ -69,6 +69,57 @@ void BM_ClimbOnHost(benchmark::State& state) {
 }
 BENCHMARK(BM_ClimbOnHost)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
+// The queries a climber asks, one kind at a time, at 20,000 points 1-3 cm off the host's bark
+// (every 5th node, on the side a climber would be): what each costs among 100k tubes and
+// 490k shade triangles. Arg: 0 light (one shadow ray through stems and leaves), 1 closest
+// stem point with the node's own stem as hint, 2 the same without a hint, 3 a 4 cm ray along
+// the stem, 4 a leaf outline (5 segments of a 6 cm blade lying on the bark).
+void BM_HostQueries(benchmark::State& state) {
+  auto s = openHostScene();
+  s->step();  // the host's stems and shade into the environment
+  const env::Environment& env = s->environment();
+  const plant::PlantModel host = std::as_const(*s).system(0).snapshot(0);
+  struct Probe {
+    Vec3 p, along, away;
+    env::SurfacePoint hint;
+  };
+  std::vector<Probe> probes;
+  for (size_t i = 0; i < host.nodeCount() && probes.size() < 20000; i += 5) {
+    const Vec3 dir = host.direction(i);
+    Vec3 side = Vec3::UnitY() - Vec3::UnitY().dot(dir) * dir;
+    if (side.norm() < 0.3f) side = Vec3::UnitX() - Vec3::UnitX().dot(dir) * dir;
+    side.normalize();
+    const float off = 0.01f + 0.02f * float(i % 7) / 6.0f;
+    const Vec3 p = host.position[i] + 0.5f * host.length[i] * dir + (host.radius[i] + off) * side;
+    const auto hint = env.closestPoint(p, 0.1f);
+    if (!hint) continue;
+    probes.push_back({p, dir, side, *hint});
+  }
+  const int kind = int(state.range(0));
+  size_t hits = 0;
+  for (auto _ : state) {
+    for (const Probe& q : probes) {
+      switch (kind) {
+        case 0: hits += env.light(q.p).exposure > 0.5f; break;
+        case 1: hits += env.closestPoint(q.p, 0.1f, &q.hint).has_value(); break;
+        case 2: hits += env.closestPoint(q.p, 0.1f).has_value(); break;
+        case 3: hits += env.rayCast(q.p, q.along, 0.04f).has_value(); break;
+        default: {
+          const Vec3 w = 0.015f * q.along.cross(q.away);
+          const Vec3 c[4] = {q.p - w + 0.01f * q.along, q.p + w + 0.01f * q.along, q.p + w + 0.07f * q.along,
+                             q.p - w + 0.07f * q.along};
+          const Vec3 from[5] = {q.p, c[0], c[1], c[2], c[3]}, to[5] = {c[0], c[1], c[2], c[3], c[0]};
+          hits += env.anySegmentBlocked(from, to, 5);
+        }
+      }
+    }
+  }
+  state.SetItemsProcessed(int64_t(state.iterations() * probes.size()));
+  state.counters["probes"] = double(probes.size());
+  state.counters["yes_share"] = double(hits) / double(state.iterations() * probes.size());
+}
+BENCHMARK(BM_HostQueries)->DenseRange(0, 4)->Unit(benchmark::kMillisecond);
+
 // Giving the environment the host's stems and leaves again: its snapshot, the tubes and shade
 // triangles, and the three Embree scenes (rays, closest points, shade) built afresh.
 void BM_HostStemUpdate(benchmark::State& state) {
