@@ -482,8 +482,9 @@ Edit readEdit(JsonObject& o) {
   if (kind == "cut") {
     Cut e;
     e.plant = readIndex(o, "plant");
-    if (o.has("particle") == o.has("node"))
-      throw o.error(o.has("node") ? "particle" : "node", "a cut takes either \"node\" or \"particle\", not both or neither");
+    if (!o.has("particle") && !o.has("node"))
+      throw o.error("node", "is required (the segment to cut; or \"particle\": the part of a particle plant)");
+    if (o.has("particle") && o.has("node")) throw o.error("particle", "a cut takes \"node\" or \"particle\", not both");
     if (o.has("particle")) e.particle = readIndex(o, "particle");
     else e.node = readIndex(o, "node");
     return e;
