@@ -7,6 +7,8 @@
 #include "tendril/env/environment.h"
 #include "tendril/env/stem_layer.h"
 
+#include "tendril/core/segments.h"
+
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -76,41 +78,14 @@ float TubeShape::lowerBound2(const Vec3& p, float best) const {
 
 TubePoint closestOnTube(const StemTube& t, const Vec3& p) { return TubeShape(t).closest(p); }
 
-namespace {
-
-// The parameters (s on p0-p1, t on q0-q1, both in [0, 1]) of the closest points of two
-// segments, by minimising the squared distance over the square, edges taken in turn.
-std::pair<float, float> closestParameters(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
-  const Vec3 d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
-  const float a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  constexpr float kTiny = 1e-20f;
-  if (a <= kTiny && e <= kTiny) return {0.0f, 0.0f};
-  if (a <= kTiny) return {0.0f, std::clamp(f / e, 0.0f, 1.0f)};
-  const float c = d1.dot(r);
-  if (e <= kTiny) return {std::clamp(-c / a, 0.0f, 1.0f), 0.0f};
-  const float b = d1.dot(d2), denom = a * e - b * b;
-  float sp = denom > kTiny * a * e ? std::clamp((b * f - c * e) / denom, 0.0f, 1.0f) : 0.0f;
-  float tq = (b * sp + f) / e;
-  if (tq < 0.0f) {
-    tq = 0.0f;
-    sp = std::clamp(-c / a, 0.0f, 1.0f);
-  } else if (tq > 1.0f) {
-    tq = 1.0f;
-    sp = std::clamp((b - c) / a, 0.0f, 1.0f);
-  }
-  return {sp, tq};
-}
-
-}  // namespace
-
 bool TubeShape::meets(const Vec3& p, const Vec3& q) const {
   // The tube holds the capsule of its smallest radius round its axis and lies in the capsule
   // of its largest: the distance between the segment and the axis decides, except between
   // the two radii (a tapering tube, met near its thinner end), where the signed distance along
   // the segment, a convex function, is minimised by golden-section search.
-  const Vec3 axisEnd = a + length * u;
-  const auto [sp, tq] = closestParameters(p, q, a, axisEnd);
-  const float d = (p + sp * (q - p) - (a + tq * (axisEnd - a))).norm();
+  Vec3 onSegment, onAxis;
+  closestSegmentPoints(p, q, a, a + length * u, &onSegment, &onAxis);
+  const float d = (onSegment - onAxis).norm();
   const float rMin = length > 0.0f ? std::min(r, r + k * length) : r;
   if (d > rMax) return false;
   if (d <= rMin) return true;

@@ -1,6 +1,7 @@
 // Collision response of seed 000 §5.2: obstacles through their signed distance fields, other
 // particles (of any plant, including the same one) through a spatial hash.
 #include "tendril/core/parallel.h"
+#include "tendril/core/segments.h"
 #include "tendril/models/stand_off.h"
 #include "tendril/particles/world.h"
 
@@ -8,43 +9,6 @@
 #include <cmath>
 
 namespace tendril::particles {
-
-namespace {
-
-// Closest points between segments p1q1 and p2q2 (Ericson, Real-Time Collision Detection §5.1.9).
-void closestSegmentPoints(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2, Vec3* c1, Vec3* c2) {
-  const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const float a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  float s = 0.0f, t = 0.0f;
-  if (a <= 1e-12f && e <= 1e-12f) {
-    *c1 = p1;
-    *c2 = p2;
-    return;
-  }
-  if (a <= 1e-12f) {
-    t = std::clamp(f / e, 0.0f, 1.0f);
-  } else {
-    const float c = d1.dot(r);
-    if (e <= 1e-12f) {
-      s = std::clamp(-c / a, 0.0f, 1.0f);
-    } else {
-      const float b = d1.dot(d2), denom = a * e - b * b;
-      s = denom > 1e-12f ? std::clamp((b * f - c * e) / denom, 0.0f, 1.0f) : 0.0f;
-      t = (b * s + f) / e;
-      if (t < 0.0f) {
-        t = 0.0f;
-        s = std::clamp(-c / a, 0.0f, 1.0f);
-      } else if (t > 1.0f) {
-        t = 1.0f;
-        s = std::clamp((b - c) / a, 0.0f, 1.0f);
-      }
-    }
-  }
-  *c1 = p1 + d1 * s;
-  *c2 = p2 + d2 * t;
-}
-
-}  // namespace
 
 void ParticleWorld::collideObstacles(const env::Environment& env) {
   const size_t n = capacity();
