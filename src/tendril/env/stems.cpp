@@ -83,6 +83,8 @@ bool TubeShape::meets(const Vec3& p, const Vec3& q) const {
   // of its largest: the distance between the segment and the axis decides, except between
   // the two radii (a tapering tube, met near its thinner end), where the signed distance along
   // the segment, a convex function, is minimised by golden-section search.
+  // First the cheap bound: every point of the segment lies within half its length of its middle.
+  if (lowerBound2(0.5f * (p + q), 0.5f * (q - p).norm()) > 0.0f) return false;
   Vec3 onSegment, onAxis;
   closestSegmentPoints(p, q, a, a + length * u, &onSegment, &onAxis);
   const float d = (onSegment - onAxis).norm();
@@ -323,7 +325,9 @@ bool Environment::layerOccluded(const StemLayer& l, const Vec3& origin, const Ve
                                 bool shade) const {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
-  for (RTCScene s : {l.rays, shade ? l.shadeScene : nullptr}) {
+  // The leaves first: under a crown most shadow rays end in a leaf soon, where the stems'
+  // traversal would have followed the whole ray (the answer is the same either way).
+  for (RTCScene s : {shade ? l.shadeScene : nullptr, l.rays}) {
     if (!s) continue;
     RTCRay ray;
     initRay(ray, origin, dir, tMin, tMax);
