@@ -72,6 +72,57 @@ TEST(Environment, RaysEmbreeCannotTakeHitNothing) {
   EXPECT_TRUE(env.occluded(Vec3::Zero(), z, 100.0f));
 }
 
+// Rays (of any length) and segment tests skip the obstacles whose boxes their span misses. Segments that only
+// just reach a surface (0.2 or 1 mm past it) must still be blocked, and those beside
+// an obstacle's box must not: checked against the analytic answer for a box turned about y,
+// alone (its box is tested) and among nine spheres far away (too many obstacles to test).
+TEST(Environment, SegmentsThatJustReachAnObstacleAreBlockedAndOthersAreNot) {
+  const RigidTransform boxAt{axisAngle(Vec3::UnitY(), 0.5f), Vec3(0, 1, 0)};
+  const Vec3 half(0.5f, 0.5f, 0.5f);
+  auto insideBox = [&](const Vec3& p) {
+    const Vec3 l = boxAt.rotation.conjugate() * (p - boxAt.translation);
+    return (l.cwiseAbs() - half).maxCoeff() < 0.0f;
+  };
+  for (bool many : {false, true}) {
+    Environment env;
+    env.addObstacle(def("box", makeBox(Vec3(1, 1, 1)), boxAt));
+    for (int k = 0; many && k < 9; ++k)
+      env.addObstacle(def("sphere", makeSphere(0.5f, 2), {Quat::Identity(), Vec3(20, float(k), 0)}));
+    env.commit();
+    Rng rng(RandomKey{17, 0, 0, 0, 1});
+    int hits = 0, checked = 0;
+    for (int i = 0; i < 4000; ++i) {
+      // A point on the box's surface, and a segment from outside to just past it.
+      Vec3 l(rng.uniform(-0.5f, 0.5f), rng.uniform(-0.5f, 0.5f), rng.uniform(-0.5f, 0.5f));
+      const int axis = int(rng.below(3));
+      l[axis] = rng.bernoulli(0.5f) ? 0.5f : -0.5f;
+      const Vec3 onSurface = boxAt.applyPoint(l);
+      const Vec3 outward = boxAt.rotation * (Vec3::Unit(axis) * (l[axis] > 0.0f ? 1.0f : -1.0f));
+      const Vec3 start = onSurface + outward * rng.uniform(0.001f, 0.3f) + 0.1f * rng.unitVector();
+      if (insideBox(start)) continue;
+      const float past = i % 4 == 0 ? 0.0002f : 0.001f;  // ending 0.2 or 1 mm inside
+      const Vec3 end = onSurface + (onSurface - start).normalized() * past;
+      const Vec3 d = (end - start).normalized();
+      const float len = (end - start).norm();
+      EXPECT_TRUE(env.anySegmentBlocked(&start, &end, 1)) << many << " " << i;
+      EXPECT_TRUE(env.rayCast(start, d, len)) << many << " " << i;
+      EXPECT_TRUE(env.occluded(start, d, len)) << many << " " << i;
+      EXPECT_TRUE(env.occluded(start - 5.0f * d, d, std::numeric_limits<float>::infinity())) << many << " " << i;
+      ++hits;
+      // The same segment moved 2 mm off the surface beside the box: clear.
+      const Vec3 shift = outward * (0.002f + (len + 0.01f));
+      const Vec3 a = start + shift, b = end + shift;
+      if (insideBox(a) || insideBox(b)) continue;
+      EXPECT_FALSE(env.anySegmentBlocked(&a, &b, 1)) << many << " " << i;
+      EXPECT_FALSE(env.rayCast(a, d, len)) << many << " " << i;
+      EXPECT_FALSE(env.occluded(a, d, len)) << many << " " << i;
+      ++checked;
+    }
+    EXPECT_GT(hits, 3000);
+    EXPECT_GT(checked, 2000);
+  }
+}
+
 TEST(Environment, ClosestPointMatchesBruteForce) {
   Environment env;
   env.addObstacle(def("sphere", makeSphere(0.7f, 3), {axisAngle(Vec3(1, 2, 3), 0.4f), Vec3(1, 0.5f, 0)}));

@@ -435,7 +435,47 @@ std::optional<RayHit> Environment::rayCast(const Vec3& origin, const Vec3& dir, 
   return hit;
 }
 
+bool Environment::segmentMeetsObstacleBoxes(const Vec3& a, const Vec3& b) const {
+  if (obstacles_.size() > 8 || !a.allFinite() || !b.allFinite()) return true;  // not worth testing them all
+  // Round-off of the hit test (Embree's robust mode) is far below this margin.
+  const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
+  const float margin = 1e-4f * (1.0f + std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()));
+  auto meets = [&](const Vec3& bl, const Vec3& bh) {
+    return lo.x() <= bh.x() + margin && bl.x() <= hi.x() + margin && lo.y() <= bh.y() + margin &&
+           bl.y() <= hi.y() + margin && lo.z() <= bh.z() + margin && bl.z() <= hi.z() + margin;
+  };
+  for (const auto& o : obstacles_)
+    if (meets(o->info.worldBounds.min, o->info.worldBounds.max)) return true;
+  return false;
+}
+
+bool Environment::rayMeetsObstacleBoxes(const Vec3& origin, const Vec3& dir, float tMin, float tMax) const {
+  if (obstacles_.size() > 8 || !origin.allFinite()) return true;  // not worth testing them all
+  for (const auto& o : obstacles_) {
+    // The slabs of the box, widened by a margin for round-off, clip [tMin, tMax].
+    const Bounds3& b = o->info.worldBounds;
+    const float margin = 1e-4f * (1.0f + std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()));
+    float t0 = tMin, t1 = tMax;
+    for (int k = 0; k < 3 && t0 <= t1; ++k) {
+      const float lo = b.min[k] - margin, hi = b.max[k] + margin;
+      if (dir[k] == 0.0f) {
+        if (origin[k] < lo || origin[k] > hi) t1 = -1.0f, t0 = 0.0f;
+        continue;
+      }
+      const float inv = 1.0f / dir[k];
+      float a = (lo - origin[k]) * inv, c = (hi - origin[k]) * inv;
+      if (a > c) std::swap(a, c);
+      t0 = std::max(t0, a), t1 = std::min(t1, c);
+    }
+    if (t0 <= t1) return true;
+  }
+  return false;
+}
+
 std::optional<RayHit> Environment::obstacleRayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
+  // A ray whose span is clear of every obstacle's box hits none.
+  if (std::isfinite(tMax) && std::isfinite(tMin) && !segmentMeetsObstacleBoxes(origin + tMin * dir, origin + tMax * dir))
+    return std::nullopt;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -471,7 +511,9 @@ bool sceneOccludes(void* scene, const Vec3& origin, const Vec3& dir, float tMin,
 bool Environment::occluded(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
   assert(!dirty_ && "Environment::commit() must be called after edits");
   if (!rayAccepted(origin, dir, tMin, tMax)) return false;
-  if (!obstacles_.empty() && sceneOccludes(scene_, origin, dir, tMin, tMax)) return true;
+  if (!obstacles_.empty() && rayMeetsObstacleBoxes(origin, dir, tMin, tMax) &&
+      sceneOccludes(scene_, origin, dir, tMin, tMax))
+    return true;
   return !stemLayers_.empty() && stemOccluded(origin, dir, tMin, tMax, false);
 }
 
@@ -499,7 +541,7 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
       regular = false;
       continue;
     }
-    if (obstacles_.empty()) continue;
+    if (obstacles_.empty() || !segmentMeetsObstacleBoxes(from[i], to[i])) continue;
     ray.org_x = from[i].x();
     ray.org_y = from[i].y();
     ray.org_z = from[i].z();
@@ -821,7 +863,8 @@ LightSample Environment::light(const Vec3& p) const {
       Vec3 d = coneSample(toLight, l.angularRadius, i, n);
       // Obstacles, then the stems and leaves of support plants, each tested once.
       const bool blocked = rayAccepted(p, d, 1e-4f, tMax) &&
-                           ((!obstacles_.empty() && sceneOccludes(scene_, p, d, 1e-4f, tMax)) ||
+                           ((!obstacles_.empty() && rayMeetsObstacleBoxes(p, d, 1e-4f, tMax) &&
+                             sceneOccludes(scene_, p, d, 1e-4f, tMax)) ||
                             (!stemLayers_.empty() && stemOccluded(p, d, 1e-4f, tMax, true)));
       if (!blocked) ++unblocked;
     }
