@@ -381,6 +381,16 @@ void Environment::commit() {
   rtcCommitScene(scene);
   commitStems();
 
+  // The obstacles' boxes for rays to skip (rayMeetsObstacleBoxes), widened by a margin far above
+  // the round-off of Embree's robust hit test; with more obstacles rays do not try.
+  rayBoxes_.clear();
+  if (obstacles_.size() <= kRayBoxes)
+    for (const auto& o : obstacles_) {
+      const Bounds3& b = o->info.worldBounds;
+      const float margin = 1e-4f * (1.0f + std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()));
+      rayBoxes_.push_back({b.min - Vec3::Constant(margin), b.max + Vec3::Constant(margin)});
+    }
+
   // A scene of a few triangles in all (walls, boxes, planes): closest-point queries test each
   // triangle's box themselves, which is several times cheaper than a traversal and its callbacks.
   smallScene_ = SmallScene{};
@@ -435,35 +445,18 @@ std::optional<RayHit> Environment::rayCast(const Vec3& origin, const Vec3& dir, 
   return hit;
 }
 
-bool Environment::segmentMeetsObstacleBoxes(const Vec3& a, const Vec3& b) const {
-  if (obstacles_.size() > 8 || !a.allFinite() || !b.allFinite()) return true;  // not worth testing them all
-  // Round-off of the hit test (Embree's robust mode) is far below this margin.
-  const Vec3 lo = a.cwiseMin(b), hi = a.cwiseMax(b);
-  const float margin = 1e-4f * (1.0f + std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()));
-  auto meets = [&](const Vec3& bl, const Vec3& bh) {
-    return lo.x() <= bh.x() + margin && bl.x() <= hi.x() + margin && lo.y() <= bh.y() + margin &&
-           bl.y() <= hi.y() + margin && lo.z() <= bh.z() + margin && bl.z() <= hi.z() + margin;
-  };
-  for (const auto& o : obstacles_)
-    if (meets(o->info.worldBounds.min, o->info.worldBounds.max)) return true;
-  return false;
-}
-
 bool Environment::rayMeetsObstacleBoxes(const Vec3& origin, const Vec3& dir, float tMin, float tMax) const {
-  if (obstacles_.size() > 8 || !origin.allFinite()) return true;  // not worth testing them all
-  for (const auto& o : obstacles_) {
-    // The slabs of the box, widened by a margin for round-off, clip [tMin, tMax].
-    const Bounds3& b = o->info.worldBounds;
-    const float margin = 1e-4f * (1.0f + std::max(b.min.cwiseAbs().maxCoeff(), b.max.cwiseAbs().maxCoeff()));
+  if (rayBoxes_.size() != obstacles_.size() || !origin.allFinite()) return true;
+  for (const Bounds3& b : rayBoxes_) {
+    // The box's slabs clip [tMin, tMax].
     float t0 = tMin, t1 = tMax;
     for (int k = 0; k < 3 && t0 <= t1; ++k) {
-      const float lo = b.min[k] - margin, hi = b.max[k] + margin;
       if (dir[k] == 0.0f) {
-        if (origin[k] < lo || origin[k] > hi) t1 = -1.0f, t0 = 0.0f;
+        if (origin[k] < b.min[k] || origin[k] > b.max[k]) t1 = -1.0f, t0 = 0.0f;
         continue;
       }
       const float inv = 1.0f / dir[k];
-      float a = (lo - origin[k]) * inv, c = (hi - origin[k]) * inv;
+      float a = (b.min[k] - origin[k]) * inv, c = (b.max[k] - origin[k]) * inv;
       if (a > c) std::swap(a, c);
       t0 = std::max(t0, a), t1 = std::min(t1, c);
     }
@@ -473,9 +466,7 @@ bool Environment::rayMeetsObstacleBoxes(const Vec3& origin, const Vec3& dir, flo
 }
 
 std::optional<RayHit> Environment::obstacleRayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const {
-  // A ray whose span is clear of every obstacle's box hits none.
-  if (std::isfinite(tMax) && std::isfinite(tMin) && !segmentMeetsObstacleBoxes(origin + tMin * dir, origin + tMax * dir))
-    return std::nullopt;
+  if (!rayMeetsObstacleBoxes(origin, dir, tMin, tMax)) return std::nullopt;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   RTCRayHit rh;
@@ -541,7 +532,7 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
       regular = false;
       continue;
     }
-    if (obstacles_.empty() || !segmentMeetsObstacleBoxes(from[i], to[i])) continue;
+    if (obstacles_.empty() || !rayMeetsObstacleBoxes(from[i], d, 0.0f, len)) continue;
     ray.org_x = from[i].x();
     ray.org_y = from[i].y();
     ray.org_z = from[i].z();

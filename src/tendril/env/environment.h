@@ -251,13 +251,12 @@ class Environment {
   std::optional<SurfacePoint> closestObstacle(const Vec3& p, float radius, const Vec3* direction, float cosLimit,
                                               const SurfacePoint* hint) const;
   std::optional<RayHit> obstacleRayCast(const Vec3& origin, const Vec3& dir, float tMax, float tMin) const;
-  // False when the segment a-b is certainly clear of every obstacle: its box misses every
-  // obstacle's box, by a margin for round-off (scenes of a few obstacles; others: true).
-  bool segmentMeetsObstacleBoxes(const Vec3& a, const Vec3& b) const;
   // False when the ray origin + t·dir, t in [tMin, tMax] (which may be infinite), certainly
-  // misses every obstacle's box (widened for round-off): it can hit none of them (scenes of a
-  // few obstacles; others: true).
+  // misses every obstacle's box (widened for round-off): it can hit none of them (scenes of up
+  // to kRayBoxes obstacles; others: true).
   bool rayMeetsObstacleBoxes(const Vec3& origin, const Vec3& dir, float tMin, float tMax) const;
+  static constexpr size_t kRayBoxes = 8;
+  std::vector<Bounds3> rayBoxes_;  // per obstacle, widened (commit)
   float exactObstacleDistance(const Vec3& p, float maxDistance) const;
   float obstacleSignedDistance(const Vec3& p, Vec3* gradient) const;
   // o's distance grid, built on first use (thread-safe).
