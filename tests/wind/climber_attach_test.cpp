@@ -37,15 +37,16 @@ std::vector<T> readAccessor(const tinygltf::Model& m, int accessor, int width) {
 }
 
 // The clip's nodes posed at keyframe k: each node's world matrix (the channels' keyframe k
-// values, else the node's own translation and rotation), composed from the scene's roots.
+// values, else the node's own translation, rotation and scale), composed from the scene's roots.
 std::vector<Mat4> poseAt(const tinygltf::Model& m, int k) {
-  std::vector<Vec3> t(m.nodes.size(), Vec3::Zero());
+  std::vector<Vec3> t(m.nodes.size(), Vec3::Zero()), sc(m.nodes.size(), Vec3::Ones());
   std::vector<Quat> r(m.nodes.size(), Quat::Identity());
   for (size_t i = 0; i < m.nodes.size(); ++i) {
     const auto& n = m.nodes[i];
     if (n.translation.size() == 3) t[i] = Vec3(float(n.translation[0]), float(n.translation[1]), float(n.translation[2]));
     if (n.rotation.size() == 4)
       r[i] = Quat(float(n.rotation[3]), float(n.rotation[0]), float(n.rotation[1]), float(n.rotation[2]));
+    if (n.scale.size() == 3) sc[i] = Vec3(float(n.scale[0]), float(n.scale[1]), float(n.scale[2]));
   }
   for (const tinygltf::Animation& a : m.animations)
     for (const tinygltf::AnimationChannel& c : a.channels) {
@@ -56,12 +57,15 @@ std::vector<Mat4> poseAt(const tinygltf::Model& m, int k) {
       } else if (c.target_path == "rotation") {
         const std::vector<float> v = readAccessor<float>(m, out, 4);
         r[size_t(c.target_node)] = Quat(v[size_t(4 * k + 3)], v[size_t(4 * k)], v[size_t(4 * k + 1)], v[size_t(4 * k + 2)]);
+      } else if (c.target_path == "scale") {
+        const std::vector<float> v = readAccessor<float>(m, out, 3);
+        sc[size_t(c.target_node)] = Vec3(v[size_t(3 * k)], v[size_t(3 * k + 1)], v[size_t(3 * k + 2)]);
       }
     }
   std::vector<Mat4> world(m.nodes.size(), Mat4::Identity());
   std::function<void(int, const Mat4&)> visit = [&](int node, const Mat4& parent) {
     Mat4 local = Mat4::Identity();
-    local.block<3, 3>(0, 0) = r[size_t(node)].normalized().toRotationMatrix();
+    local.block<3, 3>(0, 0) = r[size_t(node)].normalized().toRotationMatrix() * sc[size_t(node)].asDiagonal();
     local.block<3, 1>(0, 3) = t[size_t(node)];
     world[size_t(node)] = parent * local;
     for (int child : m.nodes[size_t(node)].children) visit(child, world[size_t(node)]);
@@ -328,6 +332,75 @@ TEST(ClimberOnHost, TheFrameSequenceCarriesTheClimberWithItsHost) {
   alone[1].hostPlant.clear();
   alone[1].hostNode.clear();
   EXPECT_GT(measure(alone).stray, 0.02);
+}
+
+// The growth clip: the climber grows in (its joints scale in from 0 as its nodes are born, on
+// the clock its host shares) while its clinging nodes follow the swaying host's joints, as in the
+// loop. Without the hosts the climber sways on its own and the pole moves off it.
+TEST(ClimberOnHost, InTheGrowthClipTheClimberGrowsInOnItsSwayingHost) {
+  PoleAndClimber s;
+  s.pole.age.assign(s.pole.nodeCount(), 20.0f);  // the pole was there first
+  for (size_t i = 0; i < s.climber.nodeCount(); ++i) s.climber.age[i] = 10.0f - 0.5f * float(i);  // born at 10 … 16.5 s
+  WindAnimationOptions o = clipOptions();
+  o.growth = true;
+  auto measure = [&](const std::vector<AnimatedPlant>& plants, bool check) {
+    const std::filesystem::path file = meshtest::exportTestDir() / "pole-growth.glb";
+    const WindAnimationStats stats = writeWindAnimationGlb(plants, gustyWind(), o, file);
+    if (check) {
+      const meshtest::GltfValidation v = meshtest::validateGltf(file);
+      EXPECT_EQ(v.exitCode, 0) << v.output;
+      EXPECT_EQ(v.errors, 0) << v.output;
+      EXPECT_EQ(v.warnings, 0) << v.output;
+    }
+    const tinygltf::Model m = test::loadGlb(file);
+    const std::vector<int> jointOf = jointNodeOfNodes(m, "climber", s.climber, o);
+    const std::vector<int> poleJointOf = jointNodeOfNodes(m, "pole", s.pole, o);
+    Follow f;
+    size_t unborn = 0, growing = 0, grown = 0;
+    const int frames = int(stats.keyframes);
+    for (int k = 0; k < frames; ++k) {
+      const float t = o.seconds * float(k) / float(frames - 1);
+      const float clock = std::min(20.0f, t / (kGrowthShare * o.seconds) * 20.0f);  // the growth time shown
+      const std::vector<Mat4> world = poseAt(m, k);
+      for (size_t i = 1; i <= 11; ++i) {  // the clinging nodes
+        const Mat4 skin = world[size_t(jointOf[i])] * inverseBind(m, "climber", jointOf[i]);
+        const float scale = std::cbrt(skin.block<3, 3>(0, 0).determinant());
+        const float born = 20.0f - s.climber.age[i];
+        if (clock < 10.0f) {
+          EXPECT_NEAR(scale, 0.0f, 1e-6f) << "node " << i << " at " << t << " s, before the climber was born";
+          ++unborn;
+        } else if (clock > born && clock < 16.5f && scale > 0.01f && scale < 0.99f) {
+          ++growing;
+        }
+        if (t < kGrowthShare * o.seconds) continue;
+        // Grown: the node at its rest offset from the host node it clings to, as the clip draws the host.
+        EXPECT_NEAR(scale, 1.0f, 1e-4f) << "node " << i << " at " << t << " s";
+        ++grown;
+        const size_t hn = size_t(s.plants[1].hostNode[i]);
+        const Vec3 node = apply(skin, s.climber.position[i]);
+        const Vec3 host = apply(world[size_t(poleJointOf[hn])] * inverseBind(m, "pole", poleJointOf[hn]), s.pole.position[hn]);
+        const double rest = (s.climber.position[i] - s.pole.position[hn]).norm();
+        f.stray = std::max(f.stray, std::abs(double((node - host).norm()) - rest));
+        f.hostMoves = std::max(f.hostMoves, double((host - s.pole.position[hn]).norm()));
+      }
+    }
+    if (check) {
+      std::printf("climber growing on a pole, %d keyframes: clinging nodes unborn %zu, growing %zu, grown %zu times; "
+                  "grown, the host nodes move up to %.3f m and the distance to them strays up to %.5f m\n",
+                  frames, unborn, growing, grown, f.hostMoves, f.stray);
+      EXPECT_GT(unborn, 0u);
+      EXPECT_GT(growing, 3u) << "the clinging nodes scale in";
+      EXPECT_GT(grown, 0u);
+    }
+    return f;
+  };
+  const Follow f = measure(s.plants, true);
+  EXPECT_GT(f.hostMoves, 0.05);
+  EXPECT_LT(f.stray, 0.002);
+  std::vector<AnimatedPlant> alone = s.plants;
+  alone[1].hostPlant.clear();
+  alone[1].hostNode.clear();
+  EXPECT_GT(measure(alone, false).stray, 0.02);
 }
 
 TEST(ClimberOnHost, BadHostsAreAnError) {

@@ -81,6 +81,27 @@ struct Bin {
   }
 };
 
+// A uniform scale channel for glTF node `node` from one scale per keyframe; none (false) when
+// every scale is 1.
+bool addScaleChannel(Bin& bin, tinygltf::Animation& animation, int timeAccessor, int node,
+                     const std::vector<float>& scale) {
+  if (std::all_of(scale.begin(), scale.end(), [](float s) { return s == 1.0f; })) return false;
+  std::vector<float> xyz(3 * scale.size());
+  for (size_t k = 0; k < scale.size(); ++k) std::fill_n(&xyz[3 * k], 3, scale[k]);
+  tinygltf::AnimationSampler sampler;
+  sampler.input = timeAccessor;
+  sampler.output = bin.accessor(bin.view(xyz.data(), xyz.size() * sizeof(float), 0), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                TINYGLTF_TYPE_VEC3, scale.size());
+  sampler.interpolation = "LINEAR";
+  animation.samplers.push_back(sampler);
+  tinygltf::AnimationChannel channel;
+  channel.sampler = int(animation.samplers.size() - 1);
+  channel.target_node = node;
+  channel.target_path = "scale";
+  animation.channels.push_back(channel);
+  return true;
+}
+
 // The plant the clip is meshed from: the rest plant without the leaves the loop tears off.
 // `kept` gets the rest plant's index of each leaf left.
 plant::PlantModel withoutTornLeaves(const plant::PlantModel& rest, const LeafLoop& loop, std::vector<uint32_t>& kept) {
@@ -179,6 +200,86 @@ Skeleton skeletonOf(const plant::PlantModel& rest, int maxJoints) {
   return s;
 }
 
+// Growth clips: every joint's scale at every keyframe. All plants share one clock (a node's
+// age is the time since it was born, counted back from the same present): the growth time
+// runs from the oldest node's birth to the present over the first kGrowthShare of the clip. A
+// joint scales in from 0 when its node is born to 1 once the last node it carries is; a plant
+// whose nodes are all of age 0 (a component graph) is whole from the start. No joint is larger
+// than the joint it hangs from: its parent, or for a climber's joint on a clinging node, its
+// host's joint.
+struct GrowthScales {
+  // Per plant, per joint, per keyframe: the scale in the scene and relative to the glTF parent.
+  std::vector<std::vector<std::vector<float>>> global, local;
+
+  float hostScale(size_t plant, int32_t joint, size_t k) const { return global[plant][size_t(joint)][k]; }
+};
+
+GrowthScales growthScales(const std::vector<plant::PlantModel>& rest, const std::vector<AnimatedPlant>& plants,
+                          const std::vector<Skeleton>& skeletons, bool attached, const std::vector<float>& times,
+                          float seconds) {
+  GrowthScales out;
+  out.global.resize(rest.size());
+  out.local.resize(rest.size());
+  float clock = 0.0f;
+  for (const plant::PlantModel& p : rest)
+    for (float a : p.age) clock = std::max(clock, a);
+  auto clings = [&](size_t pi, size_t node) {
+    return attached && !plants[pi].hostPlant.empty() && plants[pi].hostPlant[node] >= 0;
+  };
+  // Hosts before their climbers (a host clings to nothing).
+  for (int pass = 0; pass < 2; ++pass)
+    for (size_t pi = 0; pi < rest.size(); ++pi) {
+      const bool climber = attached && std::any_of(plants[pi].hostPlant.begin(), plants[pi].hostPlant.end(),
+                                                   [](int32_t h) { return h >= 0; });
+      if (climber != (pass == 1)) continue;
+      const plant::PlantModel& p = rest[pi];
+      const Skeleton& sk = skeletons[pi];
+      const size_t joints = sk.joints.size(), frames = times.size();
+      float own = 0.0f;
+      for (float a : p.age) own = std::max(own, a);
+      std::vector<float> start(joints), end(joints);
+      for (size_t j = 0; j < joints; ++j) start[j] = end[j] = clock - p.age[size_t(sk.joints[j])];
+      for (size_t i = 0; i < p.nodeCount(); ++i) {
+        const size_t j = size_t(sk.jointOf[i]);
+        end[j] = std::max(end[j], clock - p.age[i]);
+      }
+      const float shortest = clock / 64.0f;  // a joint whose nodes were born at once still grows in visibly
+      auto& global = out.global[pi];
+      auto& local = out.local[pi];
+      global.assign(joints, std::vector<float>(frames, 1.0f));
+      local.assign(joints, std::vector<float>(frames, 1.0f));
+      for (size_t k = 0; k < frames; ++k) {
+        const float g = std::min(clock, times[k] / (kGrowthShare * seconds) * clock);
+        for (size_t j = 0; j < joints; ++j) {  // parents first
+          const size_t node = size_t(sk.joints[j]);
+          float scale = own > 0.0f ? std::clamp((g - start[j]) / std::max(end[j] - start[j], shortest), 0.0f, 1.0f) : 1.0f;
+          float parent = 1.0f;
+          if (clings(pi, node)) {
+            const size_t h = size_t(plants[pi].hostPlant[node]);
+            parent = out.hostScale(h, skeletons[h].jointOf[size_t(plants[pi].hostNode[node])], k);
+          } else if (sk.parentJoint[j] >= 0) {
+            parent = global[size_t(sk.parentJoint[j])][k];
+          }
+          scale = std::min(scale, parent);
+          global[j][k] = scale;
+          local[j][k] = parent > 0.0f ? scale / parent : 0.0f;
+        }
+      }
+    }
+  return out;
+}
+
+// In a growth clip a climber's clinging nodes follow their host's joint, as in the loop, and
+// scale in with the climber's own joint: for each pair of host joint and climber joint, a joint
+// hanging from the host's joint at the climber joint's rest position, scaled as the climber
+// joint is (relative to the host's joint).
+struct ClingJoint {
+  int hostNode = -1;                         // the host joint's glTF node
+  size_t plant = 0, hostPlant = 0;
+  int32_t joint = -1, hostJoint = -1;        // the climber's and the host's joint
+  Vec3 offset = Vec3::Zero();                // from the host joint's rest position
+};
+
 }  // namespace
 
 WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plants, const env::WindField& wind,
@@ -194,8 +295,8 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
   for (size_t pi = 0; pi < plants.size(); ++pi) {
     if (!plants[pi].plant) throw Error(path.string(), "", fmt::format("plant {} is missing", pi));
   }
-  // Climbers follow their hosts' joints (not in growth clips).
-  const bool attached = checkHosts(plants, path) && !options.growth;
+  // Climbers follow their hosts' joints.
+  const bool attached = checkHosts(plants, path);
   for (size_t pi = 0; pi < plants.size(); ++pi) {
     wind::MotionSettings ms;
     ms.loopSeconds = options.seconds;
@@ -236,12 +337,18 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
     rootNode = 0;
     gscene.nodes.push_back(rootNode);
   }
-  for (size_t pi = 0, next = gltf.nodes.size(); pi < plants.size(); ++pi) {
+  size_t plantNodes = gltf.nodes.size();
+  for (size_t pi = 0; pi < plants.size(); ++pi) {
     skeletons[pi] = skeletonOf(scene.plants[pi], options.maxJoints);
-    skeletons[pi].firstNode = int(next);
-    next += skeletons[pi].joints.size() + (model.objects[pi].parts.empty() ? 0 : 1);
+    skeletons[pi].firstNode = int(plantNodes);
+    plantNodes += skeletons[pi].joints.size() + (model.objects[pi].parts.empty() ? 0 : 1);
   }
   std::vector<std::pair<int, int>> hostChildren;  // (host joint, climber joint), linked once all nodes exist
+  const GrowthScales growth =
+      options.growth ? growthScales(scene.plants, plants, skeletons, attached, times, options.seconds) : GrowthScales{};
+  // Growth clips: the joints that carry a climber's clinging nodes at its host's joints (see
+  // ClingJoint), after every plant's nodes.
+  std::vector<ClingJoint> clingJoints;
 
   WindAnimationStats stats;
   stats.keyframes = size_t(frames);
@@ -310,15 +417,26 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
     // added to the skin in the order the nodes first use them.
     std::vector<int32_t> skinJointOf = jointOf;
     if (hostPlant) {
-      std::map<int, int32_t> hostJoints;  // glTF node → index in the skin
+      // glTF node → index in the skin; in growth clips (host joint's node, climber joint) → index
+      std::map<std::pair<int, int32_t>, int32_t> hostJoints;
       for (size_t i = 0; i < n; ++i) {
         if (!clings(i)) continue;
         const int node = hostJointNode(i);
-        auto found = hostJoints.find(node);
+        const int32_t own = options.growth ? jointOf[i] : -1;
+        auto found = hostJoints.find({node, own});
         if (found == hostJoints.end()) {
-          found = hostJoints.emplace(node, int32_t(skin.joints.size())).first;
-          skin.joints.push_back(node);
-          bindAt(hostJointRest(i));
+          found = hostJoints.emplace(std::pair{node, own}, int32_t(skin.joints.size())).first;
+          if (options.growth) {
+            const size_t h = size_t((*hostPlant)[i]);
+            const Vec3 at = rest.position[size_t(joints[size_t(own)])];
+            clingJoints.push_back({node, pi, h, own, skeletons[h].jointOf[size_t(plants[pi].hostNode[i])],
+                                   Vec3(at - hostJointRest(i))});
+            skin.joints.push_back(int(plantNodes + clingJoints.size() - 1));
+            bindAt(at);
+          } else {
+            skin.joints.push_back(node);
+            bindAt(hostJointRest(i));
+          }
         }
         skinJointOf[i] = found->second;
       }
@@ -513,45 +631,9 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
     stats.joints += joints.size();
 
     // Growth: each joint scales in over the growth time of the nodes it carries.
-    float grown = 0.0f;  // the plant's age: its oldest node's
-    for (float a : rest.age) grown = std::max(grown, a);
-    if (options.growth && grown > 0.0f) {
-      std::vector<float> start(joints.size()), end(joints.size());
-      for (size_t j = 0; j < joints.size(); ++j) start[j] = end[j] = grown - rest.age[size_t(joints[j])];
-      for (size_t i = 0; i < n; ++i) {
-        const size_t j = size_t(jointOf[i]);
-        end[j] = std::max(end[j], grown - rest.age[i]);
-      }
-      const float shortest = grown / 64.0f;  // a joint whose nodes were born at once still grows in visibly
-      std::vector<std::vector<float>> scale(joints.size(), std::vector<float>(size_t(frames) * 3));
-      std::vector<float> global(joints.size());
-      for (int k = 0; k < frames; ++k) {
-        const float g = std::min(grown, times[size_t(k)] / (kGrowthShare * options.seconds) * grown);
-        for (size_t j = 0; j < joints.size(); ++j) {  // parents first
-          float s = std::clamp((g - start[j]) / std::max(end[j] - start[j], shortest), 0.0f, 1.0f);
-          const float parent = parentJoint[j] >= 0 ? global[size_t(parentJoint[j])] : 1.0f;
-          s = std::min(s, parent);
-          global[j] = s;
-          const float local = parent > 0.0f ? s / parent : 0.0f;
-          std::fill_n(&scale[j][size_t(k) * 3], 3, local);
-        }
-      }
-      for (size_t j = 0; j < joints.size(); ++j) {
-        if (std::all_of(scale[j].begin(), scale[j].end(), [](float s) { return s == 1.0f; })) continue;
-        tinygltf::AnimationSampler sampler;
-        sampler.input = timeAccessor;
-        sampler.output = bin.accessor(bin.view(scale[j].data(), scale[j].size() * sizeof(float), 0),
-                                      TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, size_t(frames));
-        sampler.interpolation = "LINEAR";
-        animation.samplers.push_back(sampler);
-        tinygltf::AnimationChannel channel;
-        channel.sampler = int(animation.samplers.size() - 1);
-        channel.target_node = firstNode + int(j);
-        channel.target_path = "scale";
-        animation.channels.push_back(channel);
-        ++stats.growingJoints;
-      }
-    }
+    if (options.growth)
+      for (size_t j = 0; j < joints.size(); ++j)
+        if (addScaleChannel(bin, animation, timeAccessor, firstNode + int(j), growth.local[pi][j])) ++stats.growingJoints;
 
     // The leaves' waves, one weight per target and keyframe.
     if (leavesMove && hasMesh) {
@@ -574,6 +656,23 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
       stats.morphTargets += size_t(kTargets);
     }
   }
+  if (gltf.nodes.size() != plantNodes) throw Error(path.string(), "", "wind animation: cling joints out of place");
+  for (size_t c = 0; c < clingJoints.size(); ++c) {
+    const ClingJoint& cj = clingJoints[c];
+    tinygltf::Node node;
+    node.name = fmt::format("{}-cling-{}", model.objects[cj.plant].name, c);
+    node.translation = {cj.offset.x(), cj.offset.y(), cj.offset.z()};
+    const int index = int(gltf.nodes.size());
+    gltf.nodes.push_back(std::move(node));
+    hostChildren.push_back({cj.hostNode, index});
+    std::vector<float> scale(times.size());
+    for (size_t k = 0; k < times.size(); ++k) {
+      const float host = growth.hostScale(cj.hostPlant, cj.hostJoint, k);
+      scale[k] = host > 0.0f ? growth.global[cj.plant][size_t(cj.joint)][k] / host : 0.0f;
+    }
+    if (addScaleChannel(bin, animation, timeAccessor, index, scale)) ++stats.growingJoints;
+  }
+  stats.joints += clingJoints.size();
   for (const auto& [host, climber] : hostChildren) gltf.nodes[size_t(host)].children.push_back(climber);
   gltf.scenes.push_back(std::move(gscene));
   gltf.defaultScene = 0;
