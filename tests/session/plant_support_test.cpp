@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace tendril::test {
@@ -153,7 +154,7 @@ TEST(PlantSupport, AClimberSeededWhereAClickHitsTheTrunkClimbsIt) {
   auto session = makeSession(chestnutScene(true, 100, R"({"name": "moss", "model": "graph",
       "graph": "examples/graphs/fig2.json", "position": [5, 0, 5]})"));
   session::Editor editor(*session);
-  editor.step(1);  // the supports are given to the environment as the session steps
+  // The supports are in the environment from the start, before any step.
   auto hit = session::pickSurface(*session, Vec3(3, 1.0f, 0.05f), Vec3(-1, 0, 0));
   ASSERT_TRUE(hit);
   ASSERT_TRUE(hit->onStem());
@@ -203,8 +204,36 @@ TEST(PlantSupport, CuttingAHostBranchTakesItsClimbersAndUndoBringsBothBack) {
               after[1].nodeCount(), ivyAbove, ivyAboveAfter);
   EXPECT_EQ(ivyAboveAfter, 0u);
   EXPECT_GT(after[1].nodeCount(), 20u);  // the ivy below the cut stays
+  // Before any step, what the ivy clings to (what the studio's sway and the clips carry it by)
+  // is the shoot as cut: every clinging node holds to a host node still on the plant, beside it.
+  auto clinging = [&](const std::vector<plant::PlantModel>& plants) {
+    const std::vector<session::Session::Attachment> at = session->attachments(1, plants[1], 0.08f);
+    size_t held = 0, wrong = 0;
+    for (size_t i = 0; i < at.size(); ++i) {
+      if (at[i].plant < 0) continue;
+      ++held;
+      const plant::PlantModel& host = plants[size_t(at[i].plant)];
+      const size_t h = size_t(at[i].node);
+      if (at[i].plant != 0 || h >= host.nodeCount() || (host.flags[h] & plant::kNodeBroken)) {
+        ++wrong;
+        continue;
+      }
+      const Vec3 a = host.position[h], b = host.tip(h), p = plants[1].position[i];
+      const float s = std::clamp((p - a).dot(b - a) / std::max((b - a).squaredNorm(), 1e-12f), 0.0f, 1.0f);
+      wrong += (p - (a + s * (b - a))).norm() > host.radius[h] + 0.08f + 1e-3f;
+    }
+    return std::pair{held, wrong};
+  };
+  const auto [heldAfter, wrongAfter] = clinging(after);
+  std::printf("after the cut, before a step: %zu ivy nodes cling, %zu of them to a node the cut took or not beside them\n",
+              heldAfter, wrongAfter);
+  EXPECT_GT(heldAfter, 10u);
+  EXPECT_EQ(wrongAfter, 0u);
   editor.undo();
   EXPECT_EQ(plant::contentHash(session->plants()), hashBefore);
+  const auto [heldUndone, wrongUndone] = clinging(session->plants());
+  EXPECT_GT(heldUndone, heldAfter) << "undone, the ivy above the cut clings again";
+  EXPECT_EQ(wrongUndone, 0u);
 }
 
 TEST(PlantSupport, ParticleIvyAndAnLSystemVineClimbTreesToo) {

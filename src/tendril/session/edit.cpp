@@ -370,6 +370,8 @@ void EditApplier::operator()(const Redo&) const {
 
 void applyTo(Session& s, const Edit& edit, Editor& editor, Editor::Drag& drag) {
   std::visit(EditApplier{s, editor, drag, s.environment()}, edit);
+  // A cut host, an undone edit: what climbers cling to is the plants as they now are.
+  s.refreshSupports();
 }
 
 }  // namespace

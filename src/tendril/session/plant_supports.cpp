@@ -4,10 +4,13 @@
 #include "tendril/models/plant_support.h"
 #include "tendril/session/session.h"
 
+#include <algorithm>
+
 namespace tendril::session {
 
-void Session::updateSupports() {
+void Session::updateSupports(bool stepping) {
   systemHasSupports_.resize(systems_.size(), false);
+  staleSystems_.resize(systems_.size(), 0);
   bool changed = false;
   for (size_t s = 0; s < systems_.size(); ++s) {
     bool any = false;
@@ -17,8 +20,10 @@ void Session::updateSupports() {
       systemHasSupports_[s] = false;
       continue;
     }
-    // A finished system's plants change only by edits, which mark the supports stale.
-    if (systemHasSupports_[s] && !supportsStale_ && systems_[s]->finished()) continue;
+    // A finished system's plants change only by edits, which mark the supports stale; between
+    // steps, only edits change any.
+    if (systemHasSupports_[s] && !supportsStale_ && !staleSystems_[s] && (!stepping || systems_[s]->finished()))
+      continue;
     std::vector<env::StemTube> tubes;
     std::vector<env::ShadeTriangle> shade;
     for (size_t i = 0; i < plants_.size(); ++i)
@@ -29,6 +34,7 @@ void Session::updateSupports() {
     changed = true;
   }
   supportsStale_ = false;
+  std::fill(staleSystems_.begin(), staleSystems_.end(), 0);
   if (changed) env_->commit();
 }
 

@@ -125,6 +125,8 @@ Session::Session(scene::Scene scene, Json sceneDocument, std::filesystem::path b
     }
     env_->setAirFlow(air_.get());
   }
+  // The support plants' stems from the start: a click on a trunk finds it before any step.
+  refreshSupports();
 }
 
 std::unique_ptr<Session> Session::open(const std::filesystem::path& scenePath) {
@@ -148,7 +150,7 @@ size_t Session::systemFor(const std::string& model) {
 }
 
 void Session::step() {
-  updateSupports();
+  updateSupports(true);
   if (air_) {
     // The air and the plants that take the air's push act on each other (two-way coupling),
     // then the plants step.
@@ -488,6 +490,7 @@ void Session::loadState(std::span<const uint8_t> bytes, const std::string& sourc
   }
   // Everything read: now the session changes.
   applyLoaded(std::move(loaded));
+  refreshSupports();
 }
 
 

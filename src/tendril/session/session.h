@@ -85,8 +85,10 @@ class Session {
   // The plant's own system and its index there.
   // (A plant's system taken for changing marks its stems for the supports' next update.)
   models::PlantSystem& system(size_t plant) {
-    supportsStale_ = true;
-    return *systems_[plants_.at(plant).system];
+    const size_t s = plants_.at(plant).system;
+    if (staleSystems_.size() <= s) staleSystems_.resize(systems_.size(), 0);
+    staleSystems_[s] = 1;
+    return *systems_[s];
   }
   const models::PlantSystem& system(size_t plant) const { return *systems_[plants_.at(plant).system]; }
   size_t indexInSystem(size_t plant) const { return plants_.at(plant).index; }
@@ -98,6 +100,10 @@ class Session {
   std::vector<std::pair<uint32_t, uint32_t>> clingingTo(size_t host, const std::vector<bool>& removed) const;
   // One system per model in use, in the order the models were first used.
   std::vector<models::PlantSystem*> systems();
+  // Gives the environment the stems of the support plants that changed since it last had them
+  // (edits do this as they are applied, a step as it starts), so that queries between steps
+  // (what a climber clings to, a click on a trunk) see the plants as they are.
+  void refreshSupports() { updateSupports(false); }
   // The bodies the simulated air may push, over every system that takes part in it
   // (models::AirCoupling; for particle plants, their grown branch particles).
   size_t airBodyCount() const;
@@ -200,8 +206,9 @@ class Session {
   void rebuildEnvironment(const std::vector<RigidTransform>& transforms);
   // Plants as supports (spec.support): gives the environment the stems and leaves of every
   // support plant, by system (session/plant_supports.cpp). A system's support plants are
-  // snapshot again while it grows or after anything may have changed them.
-  void updateSupports();
+  // snapshot again after anything may have changed them, and at every step while it grows
+  // (`stepping`).
+  void updateSupports(bool stepping);
   // Runs f(viewer) with the environment's queries seeing the stems of every system but `viewer`.
   template <class F>
   auto viewingAs(size_t viewer, F&& f) const {
@@ -229,7 +236,8 @@ class Session {
   uint64_t obstacleRevision_ = 0;
   std::set<std::pair<size_t, models::GrowthCause>> reportedGrowth_;  // (plant, cause) warned of
   uint32_t steps_ = 0;
-  bool supportsStale_ = true;
+  bool supportsStale_ = true;        // every system's supports
+  std::vector<uint8_t> staleSystems_;  // by system: taken for changing since its supports were given
   std::vector<bool> systemHasSupports_;  // by system, as last given to the environment
   double airSeconds_ = 0.0;
   uint32_t airSteps_ = 0;
