@@ -12,6 +12,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <set>
 
 namespace tendril::particles {
@@ -78,9 +80,8 @@ ParticleSpecies wallIvy(float breakThreshold, int maxParticles) {
 TEST(ParticleAnchors, AnUndisturbedIvyOnAWallLosesNothingOver60Seconds) {
   auto env = makeEnv(kGroundAndWall);
   ParticleWorld w;
-  // Capped at 2,500 particles, which it reaches after about 15 s, still on the wall: grown on
-  // without a cap, shoots leave the wall and hang, and the first break, at 22-30 s, sets off a
-  // cascade that throws the whole plant off (docs/particles.md, step 5: not yet solved).
+  // Capped at 2,500 particles, which it reaches after about 15 s, still on the wall (grown on
+  // without a cap: AnUncappedIvyOnATallWallKeepsItsFootPast30Seconds below).
   const ParticleSpecies s = wallIvy(0.3f, 2500);
   const uint32_t plant = w.addPlant("ivy", s, Vec3(0, 0.03f, 0.11f), Vec3(0, 1, 0), 1, *env);
   const int steps = int(std::lround(60.0f / w.settings().dt));
@@ -181,6 +182,47 @@ TEST(ParticleAnchors, ADraggedIvyBreaksExactlyWhereItsStrainPassesTheThreshold) 
   std::printf("[ measured ] drag 60 cm off the wall: %zu of %zu connection-steps judged broke (smallest strain "
               "%.3f), the largest kept strain %.3f, breaking strain %.3f; %zu of %zu particles detached\n",
               broke, judged, double(smallestBroken), double(largestKept), double(breaking), detached, before);
+}
+
+// Grown without a cap on a wall 14 m high, past the 30 s at which the first break used to come:
+// a root stayed as short as it was seeded (6 mm) while its first particle thickened to 3.5 cm and
+// collisions held that particle a radius off the ground and the wall, so the foot connection was
+// pulled 30 % beyond its grown length (a + a_root), broke at 31 s, and the whole plant — 14,000
+// particles — fell off the wall (a broken-off piece lets go of its anchors) and shattered (kinetic
+// energy 180 J). A root now stays a ball of its radius as it thickens (a_root = b_root).
+TEST(ParticleAnchors, AnUncappedIvyOnATallWallKeepsItsFootPast30Seconds) {
+  auto env = makeEnv(R"({"obstacles": [{"name": "ground", "type": "plane", "size": [40, 40]},
+                                       {"name": "wall", "type": "wall", "size": [20, 14, 0.2]}],
+                         "lights": [{"type": "directional", "direction": [0, -0.6, -1]}]})");
+  ParticleWorld w;
+  const ParticleSpecies s = wallIvy(0.3f, 25000);  // the shipped cap: not reached in this run
+  const uint32_t plant = w.addPlant("ivy", s, Vec3(0, 0.03f, 0.11f), Vec3(0, 1, 0), 1, *env);
+  uint32_t foot = kNone;  // the plant's first particle
+  for (uint32_t i = 0; i < w.capacity(); ++i)
+    if (w.active(i) && !(w.flags(i) & kRoot) && w.plantOf(i) == plant && w.parent(i) != kNone &&
+        (w.flags(w.parent(i)) & kRoot))
+      foot = i;
+  ASSERT_NE(foot, kNone);
+  const uint32_t root = w.parent(foot);
+  float most = 0.0f, footMost = 0.0f;
+  int firstLoss = -1;
+  for (int k = 0; k < 1300; ++k) {  // 32.5 s
+    w.step(*env);
+    most = std::max(most, largestJudgedStrain(w));
+    if (w.parent(foot) == root) footMost = std::max(footMost, w.strain(foot));
+    const Losses l = losses(w);
+    if (firstLoss < 0 && (l.detached > 0 || l.unlinked > 0)) firstLoss = k;
+  }
+  const Losses l = losses(w);
+  EXPECT_EQ(w.parent(foot), root) << "the foot connection broke";
+  EXPECT_EQ(l.detached, 0u) << "first loss at step " << firstLoss;
+  EXPECT_EQ(l.unlinked, 0u);
+  EXPECT_GT(w.particleCount(plant), 12000u) << "grown past the size at which it used to break";
+  EXPECT_LT(footMost, 0.05f) << "the foot connection is not pulled apart by the foot's thickening";
+  std::printf("[ measured ] 32.5 s uncapped on a 14 m wall at break_threshold 0.3: %zu particles, root radius %.4f m "
+              "(half length %.4f), largest strain %.4f, at the foot %.4f (breaking strain %.3f)\n",
+              w.particleCount(plant), double(w.radius(root)), double(w.halfLength(root)), double(most),
+              double(footMost), double(breakingStrain(s)));
 }
 
 }  // namespace

@@ -316,6 +316,8 @@ Fig7 replayFig7(bool wind) {
       f.childrenAfter = branchChildren(*w, e->particle);
       for (uint32_t i : f.childrenAfter)
         if (std::find(f.childrenBefore.begin(), f.childrenBefore.end(), i) == f.childrenBefore.end()) f.branch = i;
+      // Said at once: the script's cut names this particle, and fails to apply when it is none.
+      if (wind) std::printf("Fig. 7 (b): the seeded branch starts at particle %u\n", f.branch);
     }
     if (std::holds_alternative<session::Cut>(t.edit)) {
       f.stemsAfterCut = stemCount(*w, 0);
