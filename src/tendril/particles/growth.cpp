@@ -478,13 +478,6 @@ void ParticleWorld::thicken() {
   for (uint32_t i = 0; i < n; ++i)
     if ((flags_[i] & kActive) && nextRadius[i] != b_[i]) {
       b_[i] = nextRadius[i];
-      // A root is a ball of the stem's radius (spawn()), and stays one as it thickens: it is held
-      // where it was seeded, while collisions hold its thickening first particle a radius off
-      // the ground and the support. With the root as short as it was seeded, that pushed the
-      // first particle away from it by the growth of the radius, and the foot connection — its
-      // length a + a_root as grown — read a strain of 0.3 after 30 s on a wall (3.5 cm of
-      // radius), broke, and took the whole plant with it.
-      if (flags_[i] & kRoot) a_[i] = b_[i];
       updateMass(i);
     }
 }

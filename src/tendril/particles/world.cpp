@@ -228,9 +228,16 @@ float ParticleWorld::strain(uint32_t i) const {
   // bend — held open by collisions and anchors — never reaches: an undisturbed ivy on a wall read
   // strains of 0.4 there within 15 s and 1.1 after 50 s, and broke up by itself. Bending a joint
   // open or shut is shape matching's business (the stiffness), not breaking's.
+  // A root is a ball of the stem's radius (spawn() makes it one) held where it was seeded: the
+  // plant's first particle joins its surface, so the foot connection is as long as the particle's
+  // half length plus the root's radius, which secondary growth increases. (Against the root's
+  // half length as seeded, 6 mm, a foot thickened to 3.5 cm — collisions hold the first particle
+  // a radius off the ground and the support, and so away from the root — read a strain of 0.35
+  // after 31 s on a wall, broke, and the whole plant fell off: a broken-off piece lets go of its
+  // anchors.)
   const uint32_t p = parent_[i];
   if (p == kNone) return 0.0f;
-  const float length = a_[i] + a_[p];
+  const float length = a_[i] + ((flags_[p] & kRoot) ? std::max(a_[p], b_[p]) : a_[p]);
   if (!(length > 0.0f)) return 0.0f;
   return std::max(0.0f, (x_[i] - x_[p]).norm() - length) / length;
 }

@@ -150,7 +150,8 @@ class ParticleWorld final : public models::AirCoupling {
   std::span<const float> masses() const { return m_; }
   // Strain of the connection to the parent (§4.3): max(0, d − (a + a_parent)) / (a + a_parent),
   // how far the two centres are pulled apart beyond the connection's length as grown (the
-  // particles end to end), relative to it (0 for roots). Breaking compares it with
+  // particles end to end; a root, a ball, reaches its radius if that is more), relative to it
+  // (0 for roots). Breaking compares it with
   // breakingStrain(species); the studio's stress colours show it.
   float strain(uint32_t i) const;
   // The plant's growth against its first apex's unhindered growth (models/diagnosis.h).
