@@ -88,15 +88,6 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
       const float depth = contact - d;
       if (depth > 0.0f && g.squaredNorm() > 0.0f) push += g * depth;
     }
-    // The three pushes are found one after another, each along the gradient where its sample
-    // lay: out of a deep overlap at an obstacle's edge (an end pushed out of one face, the
-    // centre out of the next), their sum can leave the centre short of the surface. It is
-    // sampled once more where it ended up and pushed the rest of the way.
-    if (push.squaredNorm() > 0.0f) {
-      Vec3 g;
-      const float d = env.signedDistance(xp_[i] + push, &g);
-      if (d < contact && g.squaredNorm() > 0.0f) push += g * (contact - d);
-    }
     if (push.squaredNorm() > 0.0f) {
       xp_[i] += push;
       correction_[i] += push;

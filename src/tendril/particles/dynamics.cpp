@@ -93,7 +93,7 @@ void ParticleWorld::applyAnchors(const env::Environment& env) {
   parallelFor(0, capacity(), [&](size_t i) {
     if (!(flags_[i] & kActive) || !(flags_[i] & kAnchored)) return;
     const ParticleSpecies& s = plants_[plant_[i]].species;
-    if ((xp_[i] - anchor_[i]).norm() > s.anchorRelease + b_[i]) {
+    if ((xp_[i] - anchor_[i]).norm() > s.anchorRelease) {
       flags_[i] &= ~kAnchored;
       anchorPhi_[i] = 0.0f;
       return;
@@ -244,13 +244,7 @@ void ParticleWorld::gatherMatchRest() {
     r.fromParent = p != kNone ? Vec3(xr_[i] - xr_[p]) : Vec3::Zero();
     r.stiffness = stiffnessOf(i);
     r.phi = (flags_[i] & kAnchored) ? anchorPhi_[i] : 0.0f;
-    // The anchor is a point of the support; the particle is held a radius off it, toward where
-    // it is (so that it stays held at the bark's distance as secondary growth thickens it).
-    {
-      const Vec3 off = xp_[i] - anchor_[i];
-      const float d = off.norm();
-      r.anchor = d > 1e-9f ? Vec3(anchor_[i] + off * (b_[i] / d)) : anchor_[i];
-    }
+    r.anchor = anchor_[i];
     MatchNode& node = matchNode_[k];
     node.x = xp_[i];
     node.q = qp_[i];

@@ -130,7 +130,7 @@ struct ParticleWorld::ApexUpdate {
   Quat growth = Quat::Identity();  // R_g (eq. 8), world frame
   float halfLength = 0.0f;
   bool grown = false;
-  bool anchor = false;   // anchored at anchorPoint after this step
+  bool anchor = false;
   bool dormant = false;  // crowded: the apex stops growing
   Vec3 anchorPoint = Vec3::Zero();
   Vec3 leafUp = Vec3::Zero();  // preferred leaf normal here (away from the surface / to the light)
@@ -194,8 +194,7 @@ void ParticleWorld::decideApex(uint32_t i, const env::Environment& env, ApexUpda
   // to the surface it approaches. Farther than touching distance, it also turns toward the
   // support ("the plant searches for a nearby support structure and directs its growth
   // towards this direction").
-  const std::optional<env::SurfacePoint> support = env.closestPoint(x_[i], s.adhesionDistance);
-  if (const env::SurfacePoint* sp = support ? &*support : nullptr) {
+  if (auto sp = env.closestPoint(x_[i], s.adhesionDistance)) {
     const Vec3 vs = -sp->away;
     const float along = vs.dot(vf);
     Vec3 axis = vs.cross(vf);
@@ -207,6 +206,10 @@ void ParticleWorld::decideApex(uint32_t i, const env::Environment& env, ApexUpda
     if (along2.squaredNorm() > 1e-8f) lightPull = along2.normalized();
     u.leafUp = sp->away;
     u.leafOnSupport = true;
+    if (sp->distance <= touch) {
+      u.anchor = true;
+      u.anchorPoint = sp->point + sp->away * b_[i];
+    }
   }
   vf = (rg * forward).normalized();
   // Branches spread out (as seed 003's tips avoid each other): stems of other branches —
@@ -241,25 +244,6 @@ void ParticleWorld::decideApex(uint32_t i, const env::Environment& env, ApexUpda
     if (axis.squaredNorm() > 1e-8f) rg = axisAngle(axis, s.randomWalk * gdt * r.uniform(-1.0f, 1.0f)) * rg;
   }
   u.growth = turned ? Quat((turn * rg.normalized() * turn.conjugate()).normalized()) : rg.normalized();
-  // Eq. 5's anchor grows with its particle: it is the point of the support under the centre
-  // the particle will have after this step's growth (eq. 10: its parent's head plus the new
-  // half length along the new orientation), not under the centre of the tip it was when it
-  // first touched — that point lies up to a half length behind the grown centre, and the pull
-  // toward it squeezed the connection below and stretched the one above until they broke.
-  const uint32_t p = parent_[i];
-  if (p != kNone) {
-    const Quat grown = (u.growth * q_[i]).normalized();
-    const Vec3 centre = head(p) + grown * Vec3(0, u.halfLength, 0);
-    // A growing particle anchors where its grown centre touches a support, and its anchor moves
-    // to the support under that centre every step it grows there; where the grown centre has
-    // left the support's reach the anchor stays where it was, and applyAnchors() lets it go once
-    // the particle is pulled past anchor_release from it.
-    const float touch = b_[i] + s.anchorDistance;
-    if (auto under = env.closestPoint(centre, touch, support ? &*support : nullptr)) {
-      u.anchor = true;
-      u.anchorPoint = under->point;  // on the surface; the pull holds the centre a radius off it
-    }
-  }
 }
 
 // Applies an apex's update (eq. 8–10); a full-grown apex spawns its successor, lateral buds
@@ -281,8 +265,7 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
   a_[i] = u.halfLength;
   placeOnParent(i);
   updateMass(i);
-  if (u.anchor) {
-    // On the support under the grown centre (decideApex), re-projected every step it grows.
+  if (u.anchor && !(flags_[i] & kAnchored)) {
     flags_[i] |= kAnchored;
     anchor_[i] = u.anchorPoint;
   }

@@ -218,28 +218,11 @@ double ParticleWorld::unhinderedGrowth(uint32_t plant, uint32_t steps) const {
 }
 
 float ParticleWorld::strain(uint32_t i) const {
-  // §4.3: the stress of a connection is the difference between the current and the rest
-  // distance of the two particles; it breaks when they are pulled apart. The rest distance is
-  // that of the connection as grown, straight: a_parent + a_child (the particles joined end to
-  // end), and the strain is how far the two centres are pulled beyond it, relative to it.
-  // Not against the rest state's own distance of the centres: growth turns an apex by up to a
-  // radian a step (surface adaption, spreading) and turns its rest frame with it (eq. 9), so a
-  // connection it folded back on itself has a rest distance of a millimetre or less, which the
-  // bend — held open by collisions and anchors — never reaches: an undisturbed ivy on a wall read
-  // strains of 0.4 there within 15 s and 1.1 after 50 s, and broke up by itself. Bending a joint
-  // open or shut is shape matching's business (the stiffness), not breaking's.
-  // A root is a ball of the stem's radius (spawn() makes it one) held where it was seeded: the
-  // plant's first particle joins its surface, so the foot connection is as long as the particle's
-  // half length plus the root's radius, which secondary growth increases. (Against the root's
-  // half length as seeded, 6 mm, a foot thickened to 3.5 cm — collisions hold the first particle
-  // a radius off the ground and the support, and so away from the root — read a strain of 0.35
-  // after 31 s on a wall, broke, and the whole plant fell off: a broken-off piece lets go of its
-  // anchors.)
-  const uint32_t p = parent_[i];
+  uint32_t p = parent_[i];
   if (p == kNone) return 0.0f;
-  const float length = a_[i] + ((flags_[p] & kRoot) ? std::max(a_[p], b_[p]) : a_[p]);
-  if (!(length > 0.0f)) return 0.0f;
-  return std::max(0.0f, (x_[i] - x_[p]).norm() - length) / length;
+  float rest = (xr_[i] - xr_[p]).norm();
+  if (!(rest > 0.0f)) return 0.0f;
+  return std::abs((x_[i] - x_[p]).norm() - rest) / rest;
 }
 
 models::AirBodies ParticleWorld::airBodies() const {
@@ -318,23 +301,8 @@ void ParticleWorld::removeRestingPieces() {
     if ((flags_[i] & kActive) && (flags_[i] & kResting)) release(i);
 }
 
-void ParticleWorld::updateRestingPieces(const env::Environment& env) {
+void ParticleWorld::updateRestingPieces() {
   const float dt = settings_.dt;
-  // A broken-off piece that has fallen past everything it could land on — more than
-  // kFallenOffDepth below the lowest obstacle and the lowest plant root (a piece thrown off a
-  // finite ground) — never comes to rest: it would fall for ever. It is removed with the resting
-  // pieces.
-  if (settings_.removeRestingAfter > 0.0f) {
-    const Bounds3 world = env.bounds();
-    float lowest = world.empty() ? std::numeric_limits<float>::infinity() : world.min.y();
-    for (uint32_t i = 0; i < capacity(); ++i)
-      if ((flags_[i] & kActive) && (flags_[i] & kRoot)) lowest = std::min(lowest, x_[i].y());
-    if (std::isfinite(lowest)) {
-      const float floor = lowest - kFallenOffDepth;
-      for (uint32_t i = 0; i < capacity(); ++i)
-        if ((flags_[i] & kActive) && (flags_[i] & kDetached) && x_[i].y() < floor) release(i);
-    }
-  }
   for (uint32_t i = 0; i < capacity(); ++i) {
     if (!(flags_[i] & kActive) || !(flags_[i] & kDetached)) continue;
     if (v_[i].norm() < settings_.restingSpeed) {
@@ -376,7 +344,7 @@ void ParticleWorld::step(const env::Environment& env) {
     Timer t;
     integrate();
     breakConnections();
-    updateRestingPieces(env);
+    updateRestingPieces();
     timings_.breaking = t.seconds();
   }
   time_ += settings_.dt;

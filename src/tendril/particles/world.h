@@ -148,11 +148,7 @@ class ParticleWorld final : public models::AirCoupling {
   std::span<const float> halfLengths() const { return a_; }
   std::span<const float> radii() const { return b_; }
   std::span<const float> masses() const { return m_; }
-  // Strain of the connection to the parent (§4.3): max(0, d − (a + a_parent)) / (a + a_parent),
-  // how far the two centres are pulled apart beyond the connection's length as grown (the
-  // particles end to end; a root, a ball, reaches its radius if that is more), relative to it
-  // (0 for roots). Breaking compares it with
-  // breakingStrain(species); the studio's stress colours show it.
+  // Strain of the connection to the parent: |d − d̄| / d̄ (0 for roots).
   float strain(uint32_t i) const;
   // The plant's growth against its first apex's unhindered growth (models/diagnosis.h).
   models::GrowthGauge::Reading growthReading(uint32_t plant) const;
@@ -230,10 +226,7 @@ class ParticleWorld final : public models::AirCoupling {
   void collideParticles();
   void integrate();
   void breakConnections();
-  void updateRestingPieces(const env::Environment& env);
-  // Broken-off particles this far (m) below the lowest obstacle and plant root have fallen off
-  // the world (updateRestingPieces()).
-  static constexpr float kFallenOffDepth = 10.0f;
+  void updateRestingPieces();
   void buildOcclusion(const env::Environment& env);
   float occlusion(const Vec3& p, const Vec3& towardLight) const;
   // Stems of other branches within `radius` of particle i: their count and the sum of unit
