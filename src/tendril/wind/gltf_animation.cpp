@@ -81,6 +81,21 @@ struct Bin {
   }
 };
 
+// A linearly interpolated channel of glTF node `node`'s `path` over the clip's keyframes, its
+// values in `output`.
+void addChannel(tinygltf::Animation& animation, int timeAccessor, int output, int node, const char* path) {
+  tinygltf::AnimationSampler sampler;
+  sampler.input = timeAccessor;
+  sampler.output = output;
+  sampler.interpolation = "LINEAR";
+  animation.samplers.push_back(sampler);
+  tinygltf::AnimationChannel channel;
+  channel.sampler = int(animation.samplers.size() - 1);
+  channel.target_node = node;
+  channel.target_path = path;
+  animation.channels.push_back(channel);
+}
+
 // A uniform scale channel for glTF node `node` from one scale per keyframe; none (false) when
 // every scale is 1.
 bool addScaleChannel(Bin& bin, tinygltf::Animation& animation, int timeAccessor, int node,
@@ -88,17 +103,10 @@ bool addScaleChannel(Bin& bin, tinygltf::Animation& animation, int timeAccessor,
   if (std::all_of(scale.begin(), scale.end(), [](float s) { return s == 1.0f; })) return false;
   std::vector<float> xyz(3 * scale.size());
   for (size_t k = 0; k < scale.size(); ++k) std::fill_n(&xyz[3 * k], 3, scale[k]);
-  tinygltf::AnimationSampler sampler;
-  sampler.input = timeAccessor;
-  sampler.output = bin.accessor(bin.view(xyz.data(), xyz.size() * sizeof(float), 0), TINYGLTF_COMPONENT_TYPE_FLOAT,
-                                TINYGLTF_TYPE_VEC3, scale.size());
-  sampler.interpolation = "LINEAR";
-  animation.samplers.push_back(sampler);
-  tinygltf::AnimationChannel channel;
-  channel.sampler = int(animation.samplers.size() - 1);
-  channel.target_node = node;
-  channel.target_path = "scale";
-  animation.channels.push_back(channel);
+  addChannel(animation, timeAccessor,
+             bin.accessor(bin.view(xyz.data(), xyz.size() * sizeof(float), 0), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                          TINYGLTF_TYPE_VEC3, scale.size()),
+             node, "scale");
   return true;
 }
 
@@ -615,18 +623,8 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
                             TINYGLTF_TYPE_VEC4, size_t(frames));
       int ta = bin.accessor(bin.view(trans[j].data(), trans[j].size() * sizeof(float), 0),
                             TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, size_t(frames));
-      for (auto [accessor, pathName] : {std::pair{ra, "rotation"}, std::pair{ta, "translation"}}) {
-        tinygltf::AnimationSampler sampler;
-        sampler.input = timeAccessor;
-        sampler.output = accessor;
-        sampler.interpolation = "LINEAR";
-        animation.samplers.push_back(sampler);
-        tinygltf::AnimationChannel channel;
-        channel.sampler = int(animation.samplers.size() - 1);
-        channel.target_node = firstNode + int(j);
-        channel.target_path = pathName;
-        animation.channels.push_back(channel);
-      }
+      addChannel(animation, timeAccessor, ra, firstNode + int(j), "rotation");
+      addChannel(animation, timeAccessor, ta, firstNode + int(j), "translation");
     }
     stats.joints += joints.size();
 
@@ -642,17 +640,10 @@ WindAnimationStats writeWindAnimationGlb(const std::vector<AnimatedPlant>& plant
         for (int target = 0; target < kTargets; ++target)
           weights[size_t(k) * kTargets + size_t(target)] =
               leafLoop.wave(target / LeafLoop::kPhases, target % LeafLoop::kPhases, times[size_t(k)], options.seconds);
-      tinygltf::AnimationSampler sampler;
-      sampler.input = timeAccessor;
-      sampler.output = bin.accessor(bin.view(weights.data(), weights.size() * sizeof(float), 0),
-                                    TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, weights.size());
-      sampler.interpolation = "LINEAR";
-      animation.samplers.push_back(sampler);
-      tinygltf::AnimationChannel channel;
-      channel.sampler = int(animation.samplers.size() - 1);
-      channel.target_node = meshNodeIndex;
-      channel.target_path = "weights";
-      animation.channels.push_back(channel);
+      addChannel(animation, timeAccessor,
+                 bin.accessor(bin.view(weights.data(), weights.size() * sizeof(float), 0),
+                              TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_SCALAR, weights.size()),
+                 meshNodeIndex, "weights");
       stats.morphTargets += size_t(kTargets);
     }
   }
