@@ -5,6 +5,7 @@
 #include "tendril/core/json_reader.h"
 #include "tendril/core/timer.h"
 #include "tendril/env/environment.h"
+#include "tendril/env/seed_check.h"
 #include "tendril/models/plant_support.h"
 #include "tendril/session/session.h"
 
@@ -22,7 +23,9 @@ std::unique_ptr<session::Session> openHostScene() {
 }
 
 // Ivy seeded along the host's stems: on the upper side of every `every`-th node of radius
-// `minRadius` or more, 3 cm off the bark, growing along the stem (at most `count` plants).
+// `minRadius` or more, 3 cm off the bark, growing along the stem (at most `count` plants). A
+// point that lies inside another stem of the host (where boughs cross) is passed over: the
+// session has the host's stems from its opening and refuses such a seed.
 void seedAlongStems(session::Session& s, float minRadius, size_t every, size_t count) {
   const plant::PlantModel host = std::as_const(s).system(0).snapshot(0);
   size_t seen = 0, added = 0;
@@ -32,6 +35,7 @@ void seedAlongStems(session::Session& s, float minRadius, size_t every, size_t c
     Vec3 up = Vec3::UnitY() - Vec3::UnitY().dot(dir) * dir;
     if (up.norm() < 0.3f) up = Vec3::UnitX() - Vec3::UnitX().dot(dir) * dir;
     const Vec3 at = host.position[i] + 0.5f * host.length[i] * dir + (host.radius[i] + 0.03f) * up.normalized();
+    if (env::seedInsideObstacle(s.environment(), at, dir)) continue;
     Json plant = {{"name", "ivy-on-" + std::to_string(i)},
                   {"position", {at.x(), at.y(), at.z()}},
                   {"direction", {dir.x(), dir.y(), dir.z()}},
