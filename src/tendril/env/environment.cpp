@@ -523,6 +523,17 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
   ray.id = 0;
   ray.flags = 0;
   bool regular = true;  // every segment finite and not absurdly far out
+  // The obstacles' rays only when the box round all the segments meets an obstacle's box
+  // (widened at commit, so the per-segment test below would reject each ray as well).
+  bool obstacleRays = !obstacles_.empty();
+  if (obstacleRays && rayBoxes_.size() == obstacles_.size() && n > 0) {
+    Bounds3 all{from[0].cwiseMin(to[0]), from[0].cwiseMax(to[0])};
+    for (size_t i = 1; i < n; ++i)
+      all.min = all.min.cwiseMin(from[i].cwiseMin(to[i])), all.max = all.max.cwiseMax(from[i].cwiseMax(to[i]));
+    obstacleRays = false;
+    for (const Bounds3& b : rayBoxes_)
+      obstacleRays |= !((all.min.array() > b.max.array()).any() || (all.max.array() < b.min.array()).any());
+  }
   for (size_t i = 0; i < n; ++i) {
     Vec3 d = to[i] - from[i];
     float len = d.norm();
@@ -532,7 +543,7 @@ bool Environment::anySegmentBlocked(const Vec3* from, const Vec3* to, size_t n) 
       regular = false;
       continue;
     }
-    if (obstacles_.empty() || !rayMeetsObstacleBoxes(from[i], d, 0.0f, len)) continue;
+    if (!obstacleRays || !rayMeetsObstacleBoxes(from[i], d, 0.0f, len)) continue;
     ray.org_x = from[i].x();
     ray.org_y = from[i].y();
     ray.org_z = from[i].z();
@@ -599,6 +610,13 @@ std::optional<SurfacePoint> Environment::closest(const Vec3& p, float radius, co
 
 std::optional<SurfacePoint> Environment::closestObstacle(const Vec3& p, float radius, const Vec3* direction,
                                                          float cosLimit, const SurfacePoint* hint) const {
+  // Farther than the radius from every obstacle's (widened) box: nothing to find. A climber
+  // in a tree asks this at every step, far above the ground.
+  if (rayBoxes_.size() == obstacles_.size()) {
+    bool near = false;
+    for (const Bounds3& b : rayBoxes_) near |= !(b.squaredDistance(p) > radius * radius);
+    if (!near) return std::nullopt;
+  }
   // Geometry ids equal obstacle indices, so small per-call tables suffice.
   constexpr size_t kStack = 16;
   const Vec3* vStack[kStack];
