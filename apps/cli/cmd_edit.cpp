@@ -35,10 +35,12 @@ int runEdit(const EditOptions& o) {
   applyCommonOptions(o.common);
   std::set<std::string> formats = parseFormats(o.formats);
   if (!std::filesystem::exists(o.input)) throw Error(o.input, "", "scene or session file does not exist");
-  // Bad outputs are reported before any work.
+  const session::EditScript script = session::loadEditScript(o.script);
+  // Bad outputs are reported before any work. The output directory is made first, so that
+  // --save and --preview may write into it (-o out --save out/session.tses).
+  const std::filesystem::path outDir = prepareOutputDir(o.outDir);
   if (!o.save.empty()) io::checkOutputPath(o.save);
   if (!o.preview.empty()) io::checkOutputPath(o.preview);
-  const session::EditScript script = session::loadEditScript(o.script);
 
   Timer total;
   std::unique_ptr<session::Session> session;
@@ -53,7 +55,6 @@ int runEdit(const EditOptions& o) {
   }
   scene::OutputSettings output = session->scene().output;  // with --lods, --lod-ratio
   applyLodOptions(o.lod, output);
-  std::filesystem::path outDir = prepareOutputDir(o.outDir);
 
   // Steps from the script's start: --steps, else the scene's "steps" (a scene) or just what the
   // script needs (a session that already grew).

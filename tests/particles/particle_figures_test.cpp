@@ -86,6 +86,128 @@ TEST(ParticleFigures, Fig11sPlantsOnTheFenceGrowTowardTheLightFromTheUpperLeft) 
   EXPECT_LE(countBelow(right, -0.02), 1u) << "almost every plant leans right";
 }
 
+// --- Fig. 9: moving a box ---
+
+// Stem particles deeper than 2 mm inside any obstacle.
+size_t penetrating(const session::Session& session, const ParticleWorld& w) {
+  size_t n = 0;
+  for (uint32_t i = 0; i < w.capacity(); ++i)
+    if (w.active(i) && !(w.flags(i) & (kLeaf | kDetached)) &&
+        session.environment().exactSignedDistance(w.position(i), 0.05f) < -0.002f)
+      ++n;
+  return n;
+}
+
+// Moves obstacle `o` to `to`: as the user does (a move_obstacle edit), or, for the comparison
+// without the carry, by setting the environment's transform alone.
+void moveObstacle(session::Session& session, uint32_t o, const RigidTransform& to, bool asEdit) {
+  if (asEdit) {
+    session::Editor editor(session);
+    editor.apply(session::MoveObstacle{o, to, std::nullopt});
+  } else {
+    session.environment().setObstacleTransform(o, to);
+    session.environmentChanged();
+  }
+}
+
+struct MoveRun {
+  size_t held = 0;         // stem particles anchored on the cube before the move
+  double drift = 0;        // their mean displacement in the cube's frame 40 steps after (m)
+  size_t penetrating = 0;  // the most stem particles inside an obstacle at any of those steps
+};
+
+MoveRun moveCube(bool asEdit) {
+  auto session = session::Session::open(scenePath("particles-fig09-cubes.json"));
+  session->run(600);
+  ParticleWorld& w = *test::particleWorld(*session);
+  const env::Environment& env = session->environment();
+  uint32_t cube = 0;
+  while (cube < env.obstacleCount() && env.obstacle(cube).name != "cube-c") ++cube;
+  EXPECT_LT(cube, env.obstacleCount());
+  const RigidTransform before = env.obstacle(cube).worldFromLocal;
+  std::vector<std::pair<uint32_t, Vec3>> held;  // particle, its place in the cube's frame
+  for (uint32_t i = 0; i < w.capacity(); ++i) {
+    if (!w.active(i) || (w.flags(i) & (kLeaf | kDetached)) || !(w.flags(i) & kAnchored)) continue;
+    const auto sp = env.closestPoint(w.position(i), 0.03f);
+    if (sp && !sp->onStem() && sp->obstacle == cube) held.emplace_back(i, before.inverse().applyPoint(w.position(i)));
+  }
+  // 30 cm to the left, 10 cm forward, turned 25° about the vertical.
+  RigidTransform to = before;
+  to.translation += Vec3(-0.3f, 0.0f, 0.1f);
+  to.rotation = (Quat(Eigen::AngleAxisf(25.0f * kPi / 180.0f, Vec3::UnitY())) * before.rotation).normalized();
+  moveObstacle(*session, cube, to, asEdit);
+  MoveRun r;
+  r.held = held.size();
+  for (int k = 0; k < 40; ++k) {
+    session->step();
+    r.penetrating = std::max(r.penetrating, penetrating(*session, w));
+  }
+  size_t n = 0;
+  for (const auto& [i, local] : held)
+    if (w.active(i)) r.drift += (to.inverse().applyPoint(w.position(i)) - local).norm(), ++n;
+  r.drift = n ? r.drift / double(n) : 0.0;
+  return r;
+}
+
+// "Move a cube and they adapt": the stems anchored on the moved cube go with it — 40 steps after
+// the move they lie where they lay on it — and no stem ends up inside a cube. Moved without the
+// carry (the environment's transform alone), the same stems are left behind.
+TEST(ParticleFigures, Fig9sMovedCubeCarriesTheStemsAnchoredOnIt) {
+  const MoveRun carried = moveCube(true), left = moveCube(false);
+  std::printf("Fig. 9: %zu stem particles anchored on cube-c; 40 steps after moving it 32 cm and turning it 25 deg "
+              "they lie %.1f mm (mean) from where they lay on it, %zu inside an obstacle at most; moved without "
+              "the carry %.1f mm, %zu inside\n",
+              carried.held, 1000 * carried.drift, carried.penetrating, 1000 * left.drift, left.penetrating);
+  EXPECT_GT(carried.held, 30u) << "the plants grow over the cube";
+  EXPECT_LT(carried.drift, 0.03) << "the anchored stems go with the cube";
+  EXPECT_GT(left.drift, 0.1) << "without the carry they stay behind";
+  EXPECT_EQ(carried.penetrating, 0u) << "no stem inside a cube";
+}
+
+// A plant seeded on a box goes with the box whole when it moves: every particle moves by the
+// box's motion, so its shape and strain do not change, and it grows on there.
+TEST(ParticleFigures, APlantSeededOnAMovedBoxGoesWithItWhole) {
+  const std::string scene = R"({"tendril": 1, "seed": 9, "steps": 200,
+    "environment": {"obstacles": [{"name": "ground", "type": "plane", "size": [6, 6]},
+                                  {"name": "box", "type": "box", "size": [0.6, 0.5, 0.6], "position": [0, 0.25, 0]}],
+                    "lights": [{"type": "directional", "direction": [0, -1, 0]}]},
+    "plants": [{"name": "ivy", "model": "particles", "species": "ivy-particles", "position": [0, 0.5, 0], "seed": 1}]})";
+  for (bool asEdit : {true, false}) {
+    SCOPED_TRACE(asEdit ? "move_obstacle edit" : "transform alone");
+    session::Session session(scene::parseScene(parseJson(scene, "box.json"), "box.json", "."));
+    session.run(200);
+    ParticleWorld& w = *test::particleWorld(session);
+    std::vector<Vec3> x(w.capacity());
+    for (uint32_t i = 0; i < w.capacity(); ++i) x[i] = w.position(i);
+    RigidTransform to;
+    to.rotation = Quat(Eigen::AngleAxisf(30.0f * kPi / 180.0f, Vec3::UnitY()));
+    to.translation = Vec3(0.8f, 0.25f, -0.2f);
+    const RigidTransform motion = to * session.environment().obstacle(1).worldFromLocal.inverse();
+    moveObstacle(session, 1, to, asEdit);
+    float worst = 0.0f;
+    size_t moved = 0;
+    for (uint32_t i = 0; i < w.capacity(); ++i)
+      if (w.active(i)) worst = std::max(worst, (w.position(i) - motion.applyPoint(x[i])).norm()), ++moved;
+    session.run(60);
+    uint32_t rootParticle = 0;
+    while (rootParticle < w.capacity() && !(w.active(rootParticle) && (w.flags(rootParticle) & kRoot))) ++rootParticle;
+    ASSERT_LT(rootParticle, w.capacity());
+    const Vec3 root = w.position(rootParticle);
+    const float rootToBox = session.environment().closestPoint(root, 1.0f)->distance;
+    std::printf("plant on a moved box (%s): %zu particles, farthest %.2g m from where the box's motion takes it; "
+                "60 steps on its root is %.3f m from the nearest surface, %zu particles\n",
+                asEdit ? "edit" : "transform alone", moved, worst, rootToBox, w.particleCount());
+    if (asEdit) {
+      EXPECT_GT(moved, 100u);
+      EXPECT_LT(worst, 1e-4f) << "every particle moved with the box";
+      EXPECT_EQ(session.environment().closestPoint(root, 1.0f)->obstacle, 1u) << "the root is on the box";
+      EXPECT_LT(rootToBox, 0.03f);
+    } else {
+      EXPECT_GT(worst, 0.3f) << "left where it was";
+    }
+  }
+}
+
 // --- Fig. 12: the effect of tropisms and material properties ---
 
 // A figure scene with the scene seed moved by `seedOffset` and every plant's species with

@@ -166,12 +166,13 @@ TEST(EditCli, EditsSavesAndContinuesASession) {
   EXPECT_TRUE(std::filesystem::exists(dir / "a/plant.glb"));
   ASSERT_TRUE(std::filesystem::exists(dir / "a.tses"));
   test::writeText(dir / "more.json", R"({"tendril_edits": 1, "edits": [{"at_step": 10, "edit": "step"}]})");
+  // The session may be saved into the output directory the command makes.
   auto second = test::runTendril("edit " + test::quoted(dir / "a.tses") + " --script " + test::quoted(dir / "more.json") +
-                                     " -o " + test::quoted(dir / "b") + " --save " + test::quoted(dir / "b.tses") +
+                                     " -o " + test::quoted(dir / "b") + " --save " + test::quoted(dir / "b/b.tses") +
                                      " -q",
                                  dir);
   ASSERT_EQ(second.exitCode, 0) << second.err;
-  LoadedSession b = loadSession(dir / "b.tses");
+  LoadedSession b = loadSession(dir / "b/b.tses");
   EXPECT_EQ(b.session->stepCount(), 71u);
   // The whole journal replays from the scene to the same state.
   auto replayed = Session::open(test::sourceDir() / "examples/scenes/edit-stage.json");

@@ -1,6 +1,6 @@
 // What a growth model can do beyond growing, as interfaces a PlantSystem implements or not
-// (PlantSystem::grip(), branchSeeding(), strainGauge(), liveSettings(), airCoupling(), growthGauge() return
-// null for a model without that capability). The Session, the edits and the apps ask a plant's system for a
+// (PlantSystem::grip(), branchSeeding(), obstacleHold(), strainGauge(), liveSettings(), airCoupling(),
+// growthGauge() return null for a model without that capability). The Session, the edits and the apps ask a plant's system for a
 // capability; they never name a model's own types. A new model gets dragging or the air's push
 // by implementing the interface.
 #pragma once
@@ -47,6 +47,16 @@ class BranchSeeding {
   // An attracting stroke seeds a branch at the full-grown part closest to one of its points
   // (within its radius), toward that point; nothing happens when no part is that close.
   virtual void seedBranchNear(const env::Stroke& stroke) = 0;
+};
+
+// Plants that hold on to obstacles (seed 000 eq. 5's anchors): when the user moves an obstacle,
+// what holds on to it moves with it (Fig. 9) instead of being left behind in the air.
+class ObstacleHold {
+ public:
+  virtual ~ObstacleHold() = default;
+  // Obstacle `obstacle` of `env`, as it stands before the move, is about to move rigidly by
+  // `motion` (world to world): the parts held on it move and turn with it. Returns how many.
+  virtual size_t obstacleMoving(const env::Environment& env, uint32_t obstacle, const RigidTransform& motion) = 0;
 };
 
 // Plants whose connections strain and can break (seed 000 §4.3).

@@ -67,12 +67,14 @@ class PlantSystem {
   // --- capabilities (models/capabilities.h): null where the model does not have one ---
   virtual const Grip* grip() const { return nullptr; }
   virtual const BranchSeeding* branchSeeding() const { return nullptr; }
+  virtual const ObstacleHold* obstacleHold() const { return nullptr; }
   virtual const StrainGauge* strainGauge() const { return nullptr; }
   virtual const LiveSettings* liveSettings() const { return nullptr; }
   virtual const AirCoupling* airCoupling() const { return nullptr; }
   virtual const GrowthGauge* growthGauge() const { return nullptr; }
   Grip* grip() { return const_cast<Grip*>(std::as_const(*this).grip()); }
   BranchSeeding* branchSeeding() { return const_cast<BranchSeeding*>(std::as_const(*this).branchSeeding()); }
+  ObstacleHold* obstacleHold() { return const_cast<ObstacleHold*>(std::as_const(*this).obstacleHold()); }
   StrainGauge* strainGauge() { return const_cast<StrainGauge*>(std::as_const(*this).strainGauge()); }
   LiveSettings* liveSettings() { return const_cast<LiveSettings*>(std::as_const(*this).liveSettings()); }
   AirCoupling* airCoupling() { return const_cast<AirCoupling*>(std::as_const(*this).airCoupling()); }

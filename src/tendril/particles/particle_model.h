@@ -24,6 +24,7 @@ ParticleSpecies loadSpecies(const std::string& nameOrPath, const std::filesystem
 class ParticlePlantSystem final : public models::PlantSystem,
                                   public models::Grip,
                                   public models::BranchSeeding,
+                                  public models::ObstacleHold,
                                   public models::StrainGauge,
                                   public models::LiveSettings,
                                   public models::GrowthGauge {
@@ -45,6 +46,7 @@ class ParticlePlantSystem final : public models::PlantSystem,
 
   const models::Grip* grip() const override { return this; }
   const models::BranchSeeding* branchSeeding() const override { return this; }
+  const models::ObstacleHold* obstacleHold() const override { return this; }
   const models::StrainGauge* strainGauge() const override { return this; }
   const models::LiveSettings* liveSettings() const override { return this; }
   const models::AirCoupling* airCoupling() const override { return &world_; }
@@ -54,7 +56,7 @@ class ParticlePlantSystem final : public models::PlantSystem,
     return world_.unhinderedGrowth(uint32_t(plant), steps);
   }
   using models::PlantSystem::airCoupling, models::PlantSystem::branchSeeding, models::PlantSystem::grip,
-      models::PlantSystem::liveSettings, models::PlantSystem::strainGauge;
+      models::PlantSystem::liveSettings, models::PlantSystem::obstacleHold, models::PlantSystem::strainGauge;
 
   // Grip
   std::vector<uint32_t> nodeHandles(size_t plant) const override { return world_.snapshotParticles(uint32_t(plant)); }
@@ -64,6 +66,10 @@ class ParticlePlantSystem final : public models::PlantSystem,
   // BranchSeeding
   void seedBranch(size_t plant, uint32_t handle, const Vec3& direction, const std::string& what) override;
   void seedBranchNear(const env::Stroke& stroke) override;
+  // ObstacleHold: the particles anchored on the obstacle, and roots seeded on it, move with it.
+  size_t obstacleMoving(const env::Environment& env, uint32_t obstacle, const RigidTransform& motion) override {
+    return world_.carryWithObstacle(env, obstacle, motion);
+  }
   // StrainGauge: branch particles that are not growing apices are judged (particles/dynamics.cpp).
   std::vector<NodeStrain> nodeStrain(size_t plant) const override;
   // LiveSettings: Table 2 of seed 000 and the growth and mechanics settings beside it.

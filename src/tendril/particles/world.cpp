@@ -249,6 +249,54 @@ double ParticleWorld::kineticEnergy() const {
   return e;
 }
 
+size_t ParticleWorld::carryWithObstacle(const env::Environment& env, uint32_t obstacle, const RigidTransform& motion) {
+  if (obstacle >= env.obstacleCount()) return 0;
+  // Whether a point `gap` off a surface lies on the moving obstacle: its nearest surface, within
+  // a centimetre more than that, is one of the obstacle's triangles.
+  auto onObstacle = [&](const Vec3& p, float gap) {
+    const std::optional<env::SurfacePoint> sp = env.closestPoint(p, gap + 0.01f);
+    return sp && !sp->onStem() && sp->obstacle == obstacle;
+  };
+  const Quat turn = motion.rotation;
+  auto carry = [&](uint32_t i) {
+    x_[i] = motion.applyPoint(x_[i]);
+    xp_[i] = motion.applyPoint(xp_[i]);
+    q_[i] = (turn * q_[i]).normalized();
+    qp_[i] = (turn * qp_[i]).normalized();
+    v_[i] = turn * v_[i];
+    w_[i] = turn * w_[i];
+  };
+  // Plants seeded on the obstacle: every particle of theirs, rest shape and anchors too.
+  std::vector<uint8_t> whole(plants_.size(), 0);
+  for (uint32_t p = 0; p < plants_.size(); ++p) {
+    const uint32_t r = plants_[p].root;
+    whole[p] = r != kNone && r < capacity() && (flags_[r] & kActive) && onObstacle(xr_[r], b_[r]);
+  }
+  std::vector<uint8_t> moved(capacity(), 0);
+  parallelFor(0, capacity(), [&](size_t i) {
+    if (!(flags_[i] & kActive)) return;
+    const bool anchoredHere = (flags_[i] & kAnchored) && onObstacle(anchor_[i], b_[i]);
+    if (whole[plant_[i]] && !(flags_[i] & kDetached)) {
+      carry(uint32_t(i));
+      xr_[i] = motion.applyPoint(xr_[i]);
+      qr_[i] = (turn * qr_[i]).normalized();
+      // An anchor on another surface lets go: the plant has left it.
+      if (flags_[i] & kAnchored) {
+        if (anchoredHere) anchor_[i] = motion.applyPoint(anchor_[i]);
+        else flags_[i] &= ~kAnchored;
+      }
+      moved[i] = 1;
+    } else if (anchoredHere) {
+      carry(uint32_t(i));
+      anchor_[i] = motion.applyPoint(anchor_[i]);
+      moved[i] = 1;
+    }
+  }, 256);
+  size_t count = 0;
+  for (uint8_t m : moved) count += m;
+  return count;
+}
+
 void ParticleWorld::setDrag(uint32_t particle, const Vec3& target, float strength) {
   if (particle >= capacity() || !(flags_[particle] & kActive)) {
     dragParticle_ = kNone;

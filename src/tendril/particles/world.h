@@ -115,6 +115,12 @@ class ParticleWorld final : public models::AirCoupling {
   float airTimeStep() const override { return settings_.dt; }
 
   // --- interaction (§5.1) ---
+  // Obstacle `obstacle` of `env`, as it stands before the move, is about to move by `motion`
+  // (Fig. 9): a plant whose root sits on it moves with it whole, rest shape included (it keeps
+  // its shape and strain); elsewhere the particles anchored on it move and turn with it, anchors
+  // included, and the shape matching draws the rest of their stems after them. Particles on
+  // other surfaces, and plants' stems, stay. Returns how many particles were carried.
+  size_t carryWithObstacle(const env::Environment& env, uint32_t obstacle, const RigidTransform& motion);
   // Pulls a particle toward `target` through a soft constraint of the given strength (0–1).
   void setDrag(uint32_t particle, const Vec3& target, float strength);
   void clearDrag();

@@ -241,6 +241,11 @@ void EditApplier::operator()(const MoveObstacle& e) const {
     throw Error("move_obstacle", "/obstacle",
                 fmt::format("there is no obstacle {} (the scene has {})", e.obstacle, env.obstacleCount()));
   const RigidTransform t = checkedTransform(e.worldFromLocal, "move_obstacle");
+  // What holds on to the obstacle moves with it (seed 000 Fig. 9), asked of the environment
+  // as it stands before the move.
+  const RigidTransform motion = t * env.obstacle(e.obstacle).worldFromLocal.inverse();
+  for (models::PlantSystem* system : s.systems())
+    if (models::ObstacleHold* hold = system->obstacleHold()) hold->obstacleMoving(env, e.obstacle, motion);
   if (e.scale) {
     try {
       s.setObstacleScale(e.obstacle, *e.scale);  // may replace the environment
