@@ -253,6 +253,47 @@ TEST(ObstacleEdits, SessionFilesKeepImportedAndScaledObstacles) {
   }
 }
 
+// A climbing ivy seeded on a box's side goes with the box when it moves: every node, and its
+// tips, by the box's motion; it grows on over the moved box without passing through it. Undo
+// puts both back.
+TEST(ObstacleEdits, AClimberSeededOnAMovedBoxGoesWithIt) {
+  auto s = test::makeSession(groundScene(
+      R"({"name": "ivy", "species": "japanese-ivy", "position": [0, 0.1, 0.312], "seed": 2})",
+      R"({"name": "box", "type": "box", "size": [0.6, 0.5, 0.6], "position": [0, 0.25, 0]})"));
+  Editor editor(*s);
+  editor.step(30);
+  const plant::PlantModel before = s->plants()[0];
+  ASSERT_GT(before.nodeCount(), 20u);
+  const uint64_t hashBefore = s->stateHash();
+  MoveObstacle move{1, {}, std::nullopt};
+  move.worldFromLocal.rotation = Quat(Eigen::AngleAxisf(0.6f, Vec3::UnitY()));
+  move.worldFromLocal.translation = Vec3(0.9f, 0.25f, -0.3f);
+  const RigidTransform motion = move.worldFromLocal * s->environment().obstacle(1).worldFromLocal.inverse();
+  editor.apply(move);
+  const plant::PlantModel after = s->plants()[0];
+  ASSERT_EQ(after.nodeCount(), before.nodeCount());
+  float worst = 0.0f;
+  for (size_t i = 0; i < after.nodeCount(); ++i)
+    worst = std::max(worst, (after.position[i] - motion.applyPoint(before.position[i])).norm());
+  EXPECT_LT(worst, 1e-4f) << "every node moved with the box";
+  editor.step(20);
+  const plant::PlantModel grown = s->plants()[0];
+  EXPECT_GT(grown.nodeCount(), after.nodeCount()) << "it grows on";
+  size_t crossing = 0, far = 0;
+  for (size_t i = 0; i < grown.nodeCount(); ++i) {
+    crossing += s->environment().countSegmentHits(grown.position[i], grown.tip(i)) > 0;
+    const auto sp = s->environment().closestPoint(grown.tip(i), 0.08f);
+    far += !sp;
+  }
+  std::printf("ivy on a moved box: %zu nodes moved (farthest %.2g m off the box's motion), %zu after 20 more "
+              "steps, %zu segments through a surface, %zu ends farther than 8 cm from any surface\n",
+              after.nodeCount(), worst, grown.nodeCount(), crossing, far);
+  EXPECT_EQ(crossing, 0u);
+  EXPECT_LT(far, grown.nodeCount() / 10) << "it still climbs the box";
+  editor.undo();  // the steps after the move are not an undo entry: this undoes the move
+  EXPECT_EQ(s->stateHash(), hashBefore);
+}
+
 TEST(ObstacleEdits, JsonFormsRoundTripAndAreChecked) {
   const char* script = R"({"tendril_edits": 1, "edits": [
     {"at_step": 0, "edit": "add_obstacle", "path": "meshes/post.obj", "name": "post", "translation": [0.5, 0, 0],

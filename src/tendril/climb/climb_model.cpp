@@ -18,7 +18,7 @@ void readSpeciesDocument(const models::SpeciesDocument& d, ClimbSpecies& s) {
   o.finish();
 }
 
-class ClimbPlantSystem final : public models::PlantSystem, public models::GrowthGauge {
+class ClimbPlantSystem final : public models::PlantSystem, public models::GrowthGauge, public models::ObstacleHold {
  public:
   explicit ClimbPlantSystem(const models::SystemContext& c) : system_(c.sceneSeed, c.stepTime) {}
 
@@ -43,6 +43,12 @@ class ClimbPlantSystem final : public models::PlantSystem, public models::Growth
   void loadState(ArchiveReader& in) override { system_.loadState(in); }
   void cut(size_t plant, uint32_t node) override { system_.cut(uint32_t(plant), node); }
   const models::GrowthGauge* growthGauge() const override { return this; }
+  const models::ObstacleHold* obstacleHold() const override { return this; }
+  using models::PlantSystem::obstacleHold;
+  // ObstacleHold: a plant seeded on the obstacle moves with it whole.
+  size_t obstacleMoving(const env::Environment& env, uint32_t obstacle, const RigidTransform& motion) override {
+    return system_.carryWithObstacle(env, obstacle, motion);
+  }
   Reading growthReading(size_t plant) const override { return system_.growthReading(uint32_t(plant)); }
   double unhinderedGrowth(size_t plant, uint32_t steps) const override {
     return system_.unhinderedGrowth(uint32_t(plant), steps);

@@ -140,6 +140,45 @@ void ClimbSystem::loadState(ArchiveReader& in) {
   rebuildOccupancy();
 }
 
+size_t ClimbSystem::carryWithObstacle(const env::Environment& env, uint32_t obstacle, const RigidTransform& motion) {
+  if (obstacle >= env.obstacleCount()) return 0;
+  const Quat turn = motion.rotation;
+  auto moveSupport = [&](std::optional<env::SurfacePoint>& sp) {
+    if (!sp) return;
+    if (sp->onStem() || sp->obstacle != obstacle) {
+      sp.reset();  // a surface the plant has left: the next step looks again
+      return;
+    }
+    sp->point = motion.applyPoint(sp->point);
+    sp->normal = turn * sp->normal;
+    sp->away = turn * sp->away;
+  };
+  size_t moved = 0;
+  for (auto& pp : plants_) {
+    Plant& p = *pp;
+    const ClimbSpecies& s = p.def.species;
+    // Where the plant is held: its first node, or its seed's tip before it grew.
+    if (p.model.nodeCount() == 0 && p.tips.empty()) continue;
+    const Vec3 base = p.model.nodeCount() > 0 ? p.model.position[0] : p.tips[0].position;
+    const std::optional<env::SurfacePoint> sp = env.closestPoint(base, s.surfaceOffset + s.radius + 0.01f);
+    if (!sp || sp->onStem() || sp->obstacle != obstacle) continue;
+    for (size_t i = 0; i < p.model.nodeCount(); ++i) {
+      p.model.position[i] = motion.applyPoint(p.model.position[i]);
+      p.model.orientation[i] = (turn * p.model.orientation[i]).normalized();
+    }
+    for (Vec3& e : p.nodeEnd) e = motion.applyPoint(e);
+    for (Tip& t : p.tips) {
+      t.position = motion.applyPoint(t.position);
+      t.dir = turn * t.dir;
+      t.normal = turn * t.normal;
+      moveSupport(t.support);
+    }
+    ++moved;
+  }
+  if (moved) rebuildOccupancy();
+  return moved;
+}
+
 void ClimbSystem::cut(uint32_t plantId, uint32_t node) {
   if (plantId >= plants_.size()) throw Error("", "", fmt::format("there is no climbing plant {}", plantId));
   Plant& p = *plants_[plantId];

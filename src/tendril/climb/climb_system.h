@@ -68,6 +68,12 @@ class ClimbSystem {
   // The length of stem its species' first shoot grows in `steps` steps with nothing in its way.
   double unhinderedGrowth(uint32_t plant, uint32_t steps) const;
 
+  // Obstacle `obstacle` of `env`, as it stands before the move, is about to move by `motion`: a
+  // plant seeded on it (its first node's nearest surface) moves with it whole, tips and their
+  // supports too. Plants seeded elsewhere keep their nodes where they grew, also those on the
+  // obstacle. Returns how many plants moved.
+  size_t carryWithObstacle(const env::Environment& env, uint32_t obstacle, const RigidTransform& motion);
+
   // Removes node `node` of the plant, everything beyond it, their leaves and their tips
   // (interactive cuts); the parent becomes a dead end if nothing else grows from it.
   // Throws Error for a node out of range.
