@@ -23,7 +23,7 @@ TEST(ParticleCli, TheFigureScenesAreValid) {
     auto r = test::runTendril("validate " + quoted(e.path()), dir);
     EXPECT_EQ(r.exitCode, 0) << e.path() << ": " << r.err;
   }
-  EXPECT_EQ(scenes, 12);  // the figure scenes, fig07 also with the position-based air and as the edit stage, fig12 in two
+  EXPECT_EQ(scenes, 13);  // the figure scenes, fig07 also with the position-based air and as the edit stage, fig12 in two
 }
 
 TEST(ParticleCli, GrowWritesTheEndAndANumberedSequence) {

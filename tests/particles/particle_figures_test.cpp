@@ -611,3 +611,172 @@ TEST(ParticleFigures, Fig7sEditScriptSeedsBranchesDragsBlowsAndCuts) {
 
 }  // namespace
 }  // namespace tendril::particles
+
+namespace tendril::particles {
+namespace {
+
+// --- Fig. 6: an anchored plant dragged until it breaks ---
+
+// What examples/edits/particles-fig06-drag.json does to the ivy of particles-fig06-break.json,
+// with the species' break_threshold and the drag's target (its distance out from the wall, z)
+// given, measured step by step independently of the breaking rule: the strain of a connection
+// is recomputed here from the particles' centres and half lengths.
+struct Fig6 {
+  size_t detachedBeforeDrag = 0, particlesBeforeDrag = 0, stemsBeforeDrag = 0;
+  uint32_t dragged = kNone;
+  float draggedOut[2] = {};  // the held particle's distance from the wall at the drag's start and end
+  struct Break {
+    uint32_t child, parent, step;
+    float strain;
+    bool atPull;  // a connection of the held particle or between it and the root
+  };
+  std::vector<Break> breaks;
+  float largestIntact = 0.0f;  // the largest strain of a connection breaking judges, left whole after a step
+  std::vector<uint32_t> piece;  // particles that left the plant
+  float pieceHeight[2] = {};     // the piece's mean height when the drag lets go, and when it rests
+  float pieceTopAtRest = 0.0f;   // its highest particle then
+  int restStep = -1;             // the step by which every particle of the piece rests
+  size_t anchoredBefore = 0, anchoredAfter = 0;  // the plant's other stem particles anchored before and after
+  size_t stemsAfter = 0;                         // the plant's stem particles at the scene's end
+  double othersMoved = 0.0;                      // their mean displacement over the drag, m
+};
+
+float connectionStrain(const ParticleWorld& w, uint32_t i, uint32_t p) {
+  const float ap = (w.flags(p) & kRoot) ? std::max(w.halfLengths()[p], w.radii()[p]) : w.halfLengths()[p];
+  const float length = w.halfLengths()[i] + ap;
+  return std::max(0.0f, (w.position(i) - w.position(p)).norm() - length) / length;
+}
+
+Fig6 replayFig6(float breakThreshold, float maxOut) {
+  const std::filesystem::path path = scenePath("particles-fig06-break.json");
+  Json doc = readJsonFile(path);
+  doc["plants"][0]["species"]["break_threshold"] = breakThreshold;
+  session::Session s(scene::parseScene(doc, path.string(), path.parent_path()));
+  session::Editor editor(s);
+  session::EditScript script = session::loadEditScript(test::sourceDir() / "examples/edits/particles-fig06-drag.json");
+  Fig6 f;
+  const ParticleWorld& w = *test::particleWorld(s);
+  const auto* begin = std::get_if<session::DragBegin>(&script.edits.front().edit);
+  EXPECT_TRUE(begin && std::holds_alternative<session::DragEnd>(script.edits.back().edit));
+  if (!begin) return f;
+  const uint32_t start = script.edits.front().atStep, end = script.edits.back().atStep;
+  for (session::TimedEdit& t : script.edits) {  // the pull stops maxOut in front of the wall
+    if (auto* b = std::get_if<session::DragBegin>(&t.edit)) b->target.z() = std::min(b->target.z(), maxOut);
+    if (auto* m = std::get_if<session::DragMove>(&t.edit)) m->target.z() = std::min(m->target.z(), maxOut);
+  }
+  editor.step(start);
+  f.dragged = begin->particle;
+  f.particlesBeforeDrag = w.particleCount();
+  f.stemsBeforeDrag = stemCount(w, 0);
+  std::vector<Vec3> before(w.capacity());
+  std::vector<uint8_t> anchoredBefore(w.capacity(), 0);
+  for (uint32_t i = 0; i < w.capacity(); ++i) {
+    if (!w.active(i)) continue;
+    f.detachedBeforeDrag += (w.flags(i) & kDetached) != 0;
+    before[i] = w.position(i);
+    anchoredBefore[i] = isStem(w, i, 0) && (w.flags(i) & kAnchored);
+  }
+  std::set<uint32_t> held;  // the held particle and its ancestors
+  for (uint32_t q = f.dragged; q != kNone; q = w.parent(q)) held.insert(q);
+  f.draggedOut[0] = w.position(f.dragged).z();
+  size_t next = 0;
+  for (uint32_t k = start; k < uint32_t(s.scene().steps); ++k) {
+    if (k == end) {
+      f.draggedOut[1] = w.position(f.dragged).z();
+      f.pieceHeight[0] = meanHeight(w, f.piece);
+      double moved = 0;
+      size_t n = 0;
+      const std::set<uint32_t> inPiece(f.piece.begin(), f.piece.end());
+      for (uint32_t i = 0; i < anchoredBefore.size(); ++i) {
+        if (!anchoredBefore[i] || inPiece.count(i) || held.count(i)) continue;
+        ++f.anchoredBefore;
+        f.anchoredAfter += w.active(i) && (w.flags(i) & kAnchored) && !(w.flags(i) & kDetached);
+        moved += (w.position(i) - before[i]).norm(), ++n;
+      }
+      f.othersMoved = n ? moved / double(n) : 0.0;
+    }
+    while (next < script.edits.size() && script.edits[next].atStep == k) editor.apply(script.edits[next++].edit);
+    // The connections of the plant (not of pieces already off it) before the step.
+    std::vector<uint32_t> parents(w.capacity(), kNone);
+    for (uint32_t i = 0; i < w.capacity(); ++i)
+      if (w.active(i) && !(w.flags(i) & kDetached)) parents[i] = w.parent(i);
+    editor.step(1);
+    for (uint32_t i = 0; i < parents.size(); ++i) {
+      if (!w.active(i) || parents[i] == kNone) continue;
+      if (w.parent(i) == kNone) {
+        f.breaks.push_back({i, parents[i], k, connectionStrain(w, i, parents[i]), held.count(i) || held.count(parents[i])});
+        for (uint32_t j : descendants(w, i)) f.piece.push_back(j);
+        for (uint32_t j : descendants(w, i, true)) f.piece.push_back(j);
+      } else if (w.judgedForBreaking(i) && !(w.flags(i) & kDetached)) {
+        f.largestIntact = std::max(f.largestIntact, connectionStrain(w, i, w.parent(i)));
+      }
+    }
+    // The piece comes to rest (before resting pieces are removed, their slots free for new growth).
+    if (f.restStep < 0 && !f.piece.empty() && k >= end) {
+      bool resting = true;
+      for (uint32_t i : f.piece) resting = resting && w.active(i) && (w.flags(i) & kResting);
+      if (resting) {
+        f.restStep = int(k);
+        f.pieceHeight[1] = meanHeight(w, f.piece);
+        for (uint32_t i : f.piece) f.pieceTopAtRest = std::max(f.pieceTopAtRest, w.position(i).y());
+      }
+    }
+  }
+  f.stemsAfter = stemCount(w, 0);
+  return f;
+}
+
+// Fig. 6: the ivy grown up the wall holds on by itself (nothing breaks in 17.5 s of growth).
+// Pulled out from the wall, the connections between the held shoot and its anchors stretch
+// until one passes the breaking strain, and it breaks there: on the held shoot's way to the
+// root, at a strain past the threshold (recomputed from the particles), while no connection left
+// whole is past it. The piece falls to the ground and rests; the rest of the plant stays
+// anchored and grows on. Without a threshold the same pull breaks nothing, and a pull short of
+// the breaking strain breaks nothing either.
+TEST(ParticleFigures, Fig6sDraggedShootBreaksWherePulledPastTheThresholdAndFalls) {
+  const float breaking = 0.7f * 0.5f;  // (1 − break_threshold) · max_strain of the scene's ivy
+  const Fig6 f = replayFig6(0.3f, 0.6f), unbreakable = replayFig6(0.0f, 0.6f), gentle = replayFig6(0.3f, 0.05f);
+  auto report = [](const char* what, const Fig6& r) {
+    std::printf("Fig. 6 %s: %zu particles, %zu detached before the drag; particle %u pulled from z %.3f to %.3f m; "
+                "%zu breaks, largest strain left whole %.3f; piece of %zu particles, mean height %.2f m at the release, "
+                "%.2f m (top %.2f m) at rest (step %d); others anchored %zu of %zu, moved %.4f m; %zu stems at the end\n",
+                what, r.particlesBeforeDrag, r.detachedBeforeDrag, r.dragged, r.draggedOut[0], r.draggedOut[1],
+                r.breaks.size(), r.largestIntact, r.piece.size(), r.pieceHeight[0], r.pieceHeight[1], r.pieceTopAtRest,
+                r.restStep, r.anchoredAfter, r.anchoredBefore, r.othersMoved, r.stemsAfter);
+    for (const Fig6::Break& b : r.breaks)
+      std::printf("  break at step %u: %u from %u, strain %.3f, %s\n", b.step, b.child, b.parent, b.strain,
+                  b.atPull ? "at the held particle or on its way to the root" : "elsewhere");
+  };
+  report("(pulled 0.6 m out, t_s 0.3)", f);
+  report("(t_s 0)", unbreakable);
+  report("(pulled 5 cm out, t_s 0.3)", gentle);
+  // Undisturbed for 17.5 s at t_s 0.3, the ivy holds on whole.
+  EXPECT_GT(f.stemsBeforeDrag, 1000u);
+  EXPECT_EQ(f.detachedBeforeDrag, 0u) << "nothing breaks off an undisturbed plant";
+  // Pulled out, it breaks where the pull strains it past the threshold, and nowhere else.
+  ASSERT_FALSE(f.breaks.empty()) << "the pull breaks the plant";
+  for (const Fig6::Break& b : f.breaks) {
+    EXPECT_GT(b.strain, breaking) << "connection " << b.parent << " - " << b.child << " broke below the breaking strain";
+    EXPECT_TRUE(b.atPull) << "connection " << b.parent << " - " << b.child << " broke away from the pull";
+  }
+  EXPECT_LT(f.largestIntact, breaking) << "a connection past the breaking strain was left whole";
+  EXPECT_GT(f.draggedOut[1], 0.4f) << "the held particle follows the pull out once it is free";
+  // The piece falls to the ground and rests there.
+  EXPECT_GE(f.piece.size(), 20u);
+  EXPECT_GE(f.restStep, 0) << "the piece comes to rest";
+  EXPECT_LT(f.pieceTopAtRest, 0.15f) << "on the ground";
+  // The rest of the plant stays anchored where it was, and grows on.
+  EXPECT_GE(double(f.anchoredAfter), 0.98 * double(f.anchoredBefore));
+  EXPECT_LT(f.othersMoved, 0.005);
+  EXPECT_GT(f.stemsAfter, f.stemsBeforeDrag + 200);
+  // Without a threshold the same pull stretches connections past the breaking strain and breaks
+  // nothing; a pull short of it breaks nothing either.
+  EXPECT_TRUE(unbreakable.breaks.empty());
+  EXPECT_GT(unbreakable.largestIntact, breaking);
+  EXPECT_TRUE(gentle.breaks.empty());
+  EXPECT_LT(gentle.largestIntact, breaking);
+  EXPECT_EQ(gentle.detachedBeforeDrag + unbreakable.detachedBeforeDrag, 0u);
+}
+
+}  // namespace
+}  // namespace tendril::particles

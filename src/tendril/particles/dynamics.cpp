@@ -419,6 +419,14 @@ void ParticleWorld::integrate() {
     const float sinHalf = dq.vec().norm();
     Vec3 w = Vec3::Zero();
     if (sinHalf > 1e-9f) w = dq.vec() / sinHalf * (2.0f * std::atan2(sinHalf, dq.w()) / dt);
+    if (flags_[i] & kDetached) {
+      // A broken-off piece rests when it stops moving: its displacement over the step, not the
+      // velocity the contact response gives it (a particle lying on the ground is pushed back
+      // up each step by what gravity took, and leaves with that velocity reflected, however
+      // still it lies).
+      const bool still = (xp_[i] - x_[i]).norm() < settings_.restingSpeed * dt;
+      restTime_[i] = still ? restTime_[i] + dt : 0.0f;
+    }
     x_[i] = xp_[i];
     q_[i] = qp_[i];
     v_[i] = v * damping;
@@ -439,9 +447,7 @@ void ParticleWorld::breakConnections() {
   // and the piece falls. t_s = 0 never breaks.
   std::vector<uint32_t> broken;
   for (uint32_t i = 0; i < capacity(); ++i) {
-    // Growing apices are not judged: a particle a few millimetres long shows large relative
-    // strain from tiny displacements.
-    if (!(flags_[i] & kActive) || parent_[i] == kNone || (flags_[i] & kApex)) continue;
+    if (!judgedForBreaking(i)) continue;
     const ParticleSpecies& s = plants_[plant_[i]].species;
     if (s.breakThreshold <= 0.0f) continue;
     if (strain(i) > breakingStrain(s)) broken.push_back(i);

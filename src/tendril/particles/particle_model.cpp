@@ -114,7 +114,7 @@ std::vector<models::StrainGauge::NodeStrain> ParticlePlantSystem::nodeStrain(siz
   std::vector<NodeStrain> out(ids.size());
   for (size_t n = 0; n < ids.size(); ++n) {
     const uint32_t i = ids[n];
-    if (i == kNone || (world_.flags(i) & (kApex | kLeaf))) continue;
+    if (i == kNone || !world_.judgedForBreaking(i)) continue;  // what breaking judges, nothing else
     out[n] = NodeStrain{i, world_.strain(i) / full};
   }
   return out;

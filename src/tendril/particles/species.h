@@ -55,7 +55,7 @@ struct ParticleSpecies {
   float stiffnessTime = 10.0f;   // t_m: seconds (simulated) until full stiffness
   float breakThreshold = 0.0f;   // t_s in [0, 1]: 0 never breaks; connections break above a
                                  // strain of (1 − t_s)·maxStrain
-  float maxStrain = 0.5f;        // strain (|d − d̄| / d̄) at which t_s → 0+ would break
+  float maxStrain = 0.5f;        // strain (ParticleWorld::strain) at which t_s → 0+ would break
   float damping = 0.02f;         // velocity damping per step (energy bound)
 
   // --- Anchors (eq. 5) ---
@@ -86,7 +86,7 @@ struct ParticleSpecies {
   plant::GrowthFlowSpecies growthFlow;
 };
 
-// The strain (|d − d̄| / d̄) above which a connection of the species breaks (§4.3): (1 − t_s)·
+// The strain (ParticleWorld::strain) above which a connection of the species breaks (§4.3): (1 − t_s)·
 // maxStrain. Connections of a species with t_s = 0 never break; maxStrain is then their scale.
 inline float breakingStrain(const ParticleSpecies& s) { return (1.0f - s.breakThreshold) * s.maxStrain; }
 

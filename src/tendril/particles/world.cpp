@@ -218,11 +218,26 @@ double ParticleWorld::unhinderedGrowth(uint32_t plant, uint32_t steps) const {
 }
 
 float ParticleWorld::strain(uint32_t i) const {
-  uint32_t p = parent_[i];
+  // §4.3: the stress of a connection is the difference between the current and the rest
+  // distance of the two particles; it breaks when they are pulled apart. The rest distance is
+  // that of the connection as grown, straight: a_parent + a_child (the particles joined end to
+  // end; no bend of the joint is longer), and the strain is how far the two centres are pulled
+  // beyond it, relative to it. Not against the rest state's own distance of the centres:
+  // growth turns an apex by up to a radian a step (surface adaption, spreading) and its rest
+  // frame with it (eq. 9), so a connection it folded has a rest distance of a few millimetres,
+  // which the bend, held open by collisions and anchors, never returns to. Measured that way,
+  // an undisturbed ivy on a wall at `break_threshold` 0.3 lost its first shoot after 20 steps
+  // and stopped growing. Bending a joint open or shut is shape matching's business (the
+  // stiffness), not breaking's.
+  // A root is held where it was seeded, and the plant's first particle joins its surface: the
+  // foot connection is as long as the particle's half length plus the root's radius, which
+  // secondary growth increases (collisions hold the first particle a radius off the ground, and
+  // so away from a root thickened to centimetres).
+  const uint32_t p = parent_[i];
   if (p == kNone) return 0.0f;
-  float rest = (xr_[i] - xr_[p]).norm();
-  if (!(rest > 0.0f)) return 0.0f;
-  return std::abs((x_[i] - x_[p]).norm() - rest) / rest;
+  const float length = a_[i] + ((flags_[p] & kRoot) ? std::max(a_[p], b_[p]) : a_[p]);
+  if (!(length > 0.0f)) return 0.0f;
+  return std::max(0.0f, (x_[i] - x_[p]).norm() - length) / length;
 }
 
 models::AirBodies ParticleWorld::airBodies() const {
@@ -349,17 +364,29 @@ void ParticleWorld::removeRestingPieces() {
     if ((flags_[i] & kActive) && (flags_[i] & kResting)) release(i);
 }
 
-void ParticleWorld::updateRestingPieces() {
-  const float dt = settings_.dt;
-  for (uint32_t i = 0; i < capacity(); ++i) {
-    if (!(flags_[i] & kActive) || !(flags_[i] & kDetached)) continue;
-    if (v_[i].norm() < settings_.restingSpeed) {
-      restTime_[i] += dt;
-    } else {
-      restTime_[i] = 0.0f;
+void ParticleWorld::updateRestingPieces(const env::Environment& env) {
+  // A broken-off piece that has fallen past everything it could land on — more than
+  // kFallenOffDepth below the lowest obstacle and the lowest plant root (a piece thrown off a
+  // finite ground) — never comes to rest: it would fall for ever. It is removed with the resting
+  // pieces.
+  bool anyDetached = false;
+  for (uint32_t i = 0; i < capacity() && !anyDetached; ++i)
+    anyDetached = (flags_[i] & kActive) && (flags_[i] & kDetached);
+  if (!anyDetached) return;
+  if (settings_.removeRestingAfter > 0.0f) {
+    const Bounds3 world = env.bounds();
+    float lowest = world.empty() ? std::numeric_limits<float>::infinity() : world.min.y();
+    for (uint32_t i = 0; i < capacity(); ++i)
+      if ((flags_[i] & kActive) && (flags_[i] & kRoot)) lowest = std::min(lowest, x_[i].y());
+    if (std::isfinite(lowest)) {
+      const float floor = lowest - kFallenOffDepth;
+      for (uint32_t i = 0; i < capacity(); ++i)
+        if ((flags_[i] & kActive) && (flags_[i] & kDetached) && x_[i].y() < floor) release(i);
     }
-    if (restTime_[i] >= settings_.restingTime) flags_[i] |= kResting;
   }
+  for (uint32_t i = 0; i < capacity(); ++i)  // (restTime_ is counted in integrate())
+    if ((flags_[i] & kActive) && (flags_[i] & kDetached) && restTime_[i] >= settings_.restingTime)
+      flags_[i] |= kResting;
   if (settings_.removeRestingAfter > 0.0f) {
     const float limit = settings_.restingTime + settings_.removeRestingAfter;
     for (uint32_t i = 0; i < capacity(); ++i)
@@ -392,7 +419,7 @@ void ParticleWorld::step(const env::Environment& env) {
     Timer t;
     integrate();
     breakConnections();
-    updateRestingPieces();
+    updateRestingPieces(env);
     timings_.breaking = t.seconds();
   }
   time_ += settings_.dt;

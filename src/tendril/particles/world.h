@@ -57,7 +57,7 @@ struct WorldSettings {
   int iterations = 3;                 // shape-matching passes per step
   bool plantCollisions = true;        // plant–plant and self collisions
   uint8_t padding0[3] = {};           // (the world's state is saved as bytes: no padding left unset)
-  float restingSpeed = 0.05f;         // a fallen piece slower than this (m/s)...
+  float restingSpeed = 0.05f;         // a fallen piece moving slower than this (m/s, over a step)...
   float restingTime = 1.0f;           // ...for this long (s) is at rest
   float removeRestingAfter = 3.0f;    // resting pieces disappear after this long (s); 0 keeps them
   uint32_t padding1 = 0;
@@ -154,8 +154,20 @@ class ParticleWorld final : public models::AirCoupling {
   std::span<const float> halfLengths() const { return a_; }
   std::span<const float> radii() const { return b_; }
   std::span<const float> masses() const { return m_; }
-  // Strain of the connection to the parent: |d − d̄| / d̄ (0 for roots).
+  // Strain of the connection to the parent (§4.3): max(0, d − (a + a_parent)) / (a + a_parent),
+  // how far the two centres are pulled apart beyond the connection's length as grown (the
+  // particles end to end; a root reaches its radius if that is more than its half length),
+  // relative to it (0 for roots). Breaking compares it with breakingStrain(species); the
+  // studio's stress colours show it.
   float strain(uint32_t i) const;
+  // Whether breaking judges particle i's connection to its parent: a connection of a grown
+  // particle. Growing ones (apices, young leaves) are not judged: a particle a few millimetres
+  // long, placed on its parent's head as it lengthens and pushed off a surface by collisions,
+  // shows large relative strain from tiny displacements (young leaves on an ivy on a wall
+  // read 0.4 and broke off within 15 s).
+  bool judgedForBreaking(uint32_t i) const {
+    return (flags_[i] & kActive) && (flags_[i] & kGrown) && parent_[i] != kNone;
+  }
   // The plant's growth against its first apex's unhindered growth (models/diagnosis.h).
   models::GrowthGauge::Reading growthReading(uint32_t plant) const;
   double unhinderedGrowth(uint32_t plant, uint32_t steps) const;
@@ -232,7 +244,10 @@ class ParticleWorld final : public models::AirCoupling {
   void collideParticles();
   void integrate();
   void breakConnections();
-  void updateRestingPieces();
+  void updateRestingPieces(const env::Environment& env);
+  // Broken-off particles this far (m) below the lowest obstacle and plant root have fallen off
+  // the world (updateRestingPieces()).
+  static constexpr float kFallenOffDepth = 10.0f;
   void buildOcclusion(const env::Environment& env);
   float occlusion(const Vec3& p, const Vec3& towardLight) const;
   // Stems of other branches within `radius` of particle i: their count and the sum of unit
