@@ -313,6 +313,39 @@ TEST(ParticleBreaking, RestingPiecesAreRemoved) {
   EXPECT_EQ(w.particleCount(), before - 3);
 }
 
+// A piece cut off a plant on a ledge with nothing below falls for ever: once it is 10 m below
+// every obstacle and root it is removed, and nothing of it is left behind.
+TEST(ParticleBreaking, APieceFallingOffTheWorldIsRemoved) {
+  auto env = makeEnv(R"({"obstacles": [{"name": "ledge", "type": "box", "size": [0.2, 0.2, 0.2],
+                                         "position": [0, 1.0, 0]}]})");
+  ParticleWorld w;
+  uint32_t p = w.addPlant("branch", chainSpecies(10), Vec3(0, 1.1f, 0), Vec3(1, 0, 0), 1, *env);
+  for (int k = 0; k < 600; ++k) w.step(*env);
+  const size_t before = w.particleCount();
+  uint32_t first = lastParticle(w, p);
+  while (w.parent(first) != kNone && w.parent(w.parent(first)) != kNone) first = w.parent(first);
+  size_t piece = 0;
+  for (uint32_t i = 0; i < w.capacity(); ++i)
+    for (uint32_t q = i; w.active(i) && q != kNone; q = w.parent(q))
+      if (q == first) {
+        ++piece;
+        break;
+      }
+  ASSERT_GE(piece, 5u);
+  w.cut(first);
+  float lowest = 1.0f;
+  size_t falling = 0;
+  for (int k = 0; k < 400; ++k) {
+    w.step(*env);
+    falling = 0;
+    for (uint32_t i = 0; i < w.capacity(); ++i)
+      if (w.active(i) && (w.flags(i) & kDetached)) ++falling, lowest = std::min(lowest, w.position(i).y());
+  }
+  EXPECT_EQ(falling, 0u) << "the piece is gone";
+  EXPECT_GT(lowest, -9.5f) << "removed once 10 m below the ledge";
+  EXPECT_EQ(w.particleCount(), before - piece);
+}
+
 TEST(ParticleDynamics, EnergyStaysBoundedWithoutInput) {
   auto env = makeEnv(kGroundAndWall);
   ParticleWorld w;
