@@ -9,7 +9,8 @@
 #   [Cut f(l) ?E(SURFACE ..)   where its next segment would end: the closest surface there,
 #    ?E(FACING ..)]            and the support there
 #   ?E(HIT, l + OFFSET, ...)   an obstacle hit along that segment (seed 003 §3.5)
-#   ?E(LIGHT ..) ?E(ATTRACT ..) light and painted attractors (eq. 6)
+#   ?E(LIGHT ..) ?E(ATTRACT ..) light, and painted attractors (eq. 6) and the regions repelling
+#                              strokes keep clear
 # and then does one thing: turns away from a collision (eq. 5), bends back toward a surface it
 # is about to leave (the climbing heuristic, §3.6), or grows one segment whose ray was clear —
 # so no segment ever passes through an obstacle — and applies Table 1's rules: tropism
@@ -54,12 +55,13 @@ production:
 
 # --- the tip: Program 1 ------------------------------------------------------------------
 
-# Die: too short (eq. 8 ran out), too long without support, or boxed in.
-Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1, c1, d, ax, ay, az) [?E(q2, r2, de, bx, by, bz) ?E(q6, r6, c6, df, fx, fy, fz)] ?E(q3, r3, t, nx, ny, nz) ?E(q4, e, lx, ly, lz) ?E(q5, px, py, pz) : l < LMIN || (d < 0 && u >= MAXU) || k > TURNS -> *
+# Die: too short (eq. 8 ran out), too long without support, boxed in, or in a region a
+# repelling stroke keeps clear.
+Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1, c1, d, ax, ay, az) [?E(q2, r2, de, bx, by, bz) ?E(q6, r6, c6, df, fx, fy, fz)] ?E(q3, r3, t, nx, ny, nz) ?E(q4, e, lx, ly, lz) ?E(q5, px, py, pz, kept) : l < LMIN || (d < 0 && u >= MAXU) || k > TURNS || kept > 0 -> *
 
 # Collision avoidance (eq. 5): the segment ahead would hit a surface. Turn the tip parallel
 # to it (d' = d - n(n.d)), its up vector along the normal, and look again next step.
-Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1, c1, d, ax, ay, az) [?E(q2, r2, de, bx, by, bz) ?E(q6, r6, c6, df, fx, fy, fz)] ?E(q3, r3, t, nx, ny, nz) ?E(q4, e, lx, ly, lz) ?E(q5, px, py, pz) : t >= 0 {
+Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1, c1, d, ax, ay, az) [?E(q2, r2, de, bx, by, bz) ?E(q6, r6, c6, df, fx, fy, fz)] ?E(q3, r3, t, nx, ny, nz) ?E(q4, e, lx, ly, lz) ?E(q5, px, py, pz, kept) : t >= 0 {
     dn = dot(hx, hy, hz, nx, ny, nz);
     vx = hx - nx * dn; vy = hy - ny * dn; vz = hz - nz * dn;
     if (norm(vx, vy, vz) < 0.05) {   # head-on: slide the way the up vector leans
@@ -73,12 +75,12 @@ Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1,
 # Hold on (the climbing heuristic): a climbing tip whose next segment would end out of reach of
 # every surface bends back toward the surface nearest that end — over an edge, round a corner
 # — unless it breaks free (1 - HOLD of the time).
-Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1, c1, d, ax, ay, az) [?E(q2, r2, de, bx, by, bz) ?E(q6, r6, c6, df, fx, fy, fz)] ?E(q3, r3, t, nx, ny, nz) ?E(q4, e, lx, ly, lz) ?E(q5, px, py, pz) : d >= 0 && de > REACH && ran(1) < HOLD {
+Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1, c1, d, ax, ay, az) [?E(q2, r2, de, bx, by, bz) ?E(q6, r6, c6, df, fx, fy, fz)] ?E(q3, r3, t, nx, ny, nz) ?E(q4, e, lx, ly, lz) ?E(q5, px, py, pz, kept) : d >= 0 && de > REACH && ran(1) < HOLD {
     tx = l * hx + (OFFSET - de) * bx; ty = l * hy + (OFFSET - de) * by; tz = l * hz + (OFFSET - de) * bz;
   } -> @R(tx, ty, tz, bx, by, bz) Tip(l, r, s, l0, r0, s0, n, u, o, k + 1, 0)
 
 # Grow: the ray along the heading was clear, so Tip -> segment(Tip) Tip; then Table 1.
-Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1, c1, d, ax, ay, az) [?E(q2, r2, de, bx, by, bz) ?E(q6, r6, c6, df, fx, fy, fz)] ?E(q3, r3, t, nx, ny, nz) ?E(q4, e, lx, ly, lz) ?E(q5, px, py, pz) : * {
+Apex(l, r, s, l0, r0, s0, n, u, o, k) > ?H(hx, hy, hz) ?U(ux, uy, uz) ?E(q1, r1, c1, d, ax, ay, az) [?E(q2, r2, de, bx, by, bz) ?E(q6, r6, c6, df, fx, fy, fz)] ?E(q3, r3, t, nx, ny, nz) ?E(q4, e, lx, ly, lz) ?E(q5, px, py, pz, kept) : * {
     # Climbing (§3.6): the tip has a support; `near`: the segment's end will have one.
     climb = d >= 0;
     near = df >= 0;
@@ -146,7 +148,7 @@ maximum depth: 3
 
 # A tip with its probes, or nothing when it died.
 Tip(l, r, s, l0, r0, s0, n, u, o, k, dead) : dead -> *
-Tip(l, r, s, l0, r0, s0, n, u, o, k, dead) -> Apex(l, r, s, l0, r0, s0, n, u, o, k) ?H(0, 0, 0) ?U(0, 0, 0) ?E(FACING, REACH, RELEASE, 0, 0, 0, 0) [Cut f(l) ?E(SURFACE, l + REACH, 0, 0, 0, 0) ?E(FACING, REACH, RELEASE, 0, 0, 0, 0)] ?E(HIT, l + OFFSET, 0, 0, 0, 0) ?E(LIGHT, 0, 0, 0, 0) ?E(ATTRACT, 0, 0, 0)
+Tip(l, r, s, l0, r0, s0, n, u, o, k, dead) -> Apex(l, r, s, l0, r0, s0, n, u, o, k) ?H(0, 0, 0) ?U(0, 0, 0) ?E(FACING, REACH, RELEASE, 0, 0, 0, 0) [Cut f(l) ?E(SURFACE, l + REACH, 0, 0, 0, 0) ?E(FACING, REACH, RELEASE, 0, 0, 0, 0)] ?E(HIT, l + OFFSET, 0, 0, 0, 0) ?E(LIGHT, 0, 0, 0, 0) ?E(ATTRACT, 0, 0, 0, 0)
 
 # A leaf node lifted over the stem along the up vector (after checking that way is free).
 LeafBud(on, s, r) : on -> [^(90) ?E(HIT, r + LIFT, 0) f(r + LIFT) &(90) Bud(s, r) ?H(0, 0, 0) ?U(0, 0, 0) ?E(SURFACE, REACH, 0, 0, 0, 0)]

@@ -356,6 +356,17 @@ TEST(Environment, StrokesAttractAndRepel) {
   EXPECT_EQ(env.attraction(Vec3(0, 0, 0)), Vec3::Zero());
   // Closer means stronger.
   EXPECT_GT(env.attraction(Vec3(0.9f, 0, 0)).norm(), env.attraction(Vec3(0.6f, 0, 0)).norm());
+  // The repelling stroke keeps growth out where its weight (1 − d/r)², times its strength,
+  // reaches ½: within 0.3 · 0.293 = 0.088 m at strength 1. Attracting strokes keep out nothing.
+  EXPECT_TRUE(env.repelled(Vec3(-1, 0.08f, 0)));
+  EXPECT_FALSE(env.repelled(Vec3(-1, 0.095f, 0)));
+  EXPECT_FALSE(env.repelled(Vec3(1, 0, 0)));
+  r.strength = 2.0f;  // (1 − d/r)² ≥ ¼: within 0.15 m
+  Environment strong;
+  strong.addStroke(r);
+  strong.commit();
+  EXPECT_TRUE(strong.repelled(Vec3(-1, 0.14f, 0)));
+  EXPECT_FALSE(strong.repelled(Vec3(-1, 0.16f, 0)));
 }
 
 }  // namespace

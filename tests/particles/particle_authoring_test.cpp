@@ -1,5 +1,7 @@
 // Seed 000's authoring tools and contact response shown to act on particle plants: painted
-// attractors draw growth toward a stroke and repulsors push it away (§5.1), friction slows a
+// attractors draw growth toward a stroke and repulsors push it away (§5.1), a repelling
+// stroke stops the shoots of every model that climbs (climbing, L-system and particle ivy) where
+// they enter the region it keeps clear (Fig. 1's pruned windows), friction slows a
 // piece sliding down a slope and elasticity makes a dropped piece bounce (§5.2), and Fig. 5's
 // four branching settings give the branch counts and angles its caption describes (§4.2).
 #include "support/determinism.h"
@@ -89,6 +91,66 @@ TEST(ParticleAuthoring, AnAttractorStrokeDrawsGrowthTowardItAndARepulsorPushesIt
   EXPECT_GT(attracted.within, 1.5 * none.within);
   EXPECT_GT(repelled.distance, 1.25 * none.distance) << "a repulsor stroke pushes them away";
   EXPECT_LT(repelled.within, 0.5 * none.within);
+}
+
+// A band of repelling points painted across a 3 m wall at 1 m (every 10 cm, radius 0.4 m: it
+// keeps growth out where strength · (1 − d/r)² ≥ ½, within 0.117 m of a point) and a plant of
+// `model` at the wall's foot, grown with and without the band: its stem nodes in the region the
+// band keeps clear, and the highest of them.
+constexpr float kBandRadius = 0.4f;
+
+bool inBandRegion(const Vec3& p) {
+  for (int k = 0; k <= 30; ++k)
+    if ((p - Vec3(-1.5f + 0.1f * float(k), 1.0f, 0.1f)).norm() < kBandRadius * (1.0f - std::sqrt(0.5f))) return true;
+  return false;
+}
+
+struct Band {
+  float top = 0.0f;
+  size_t inside = 0, stems = 0;
+};
+
+Band growUnderBand(const std::string& model, bool band) {
+  std::string stroke;
+  if (band) {
+    stroke = R"(, "strokes": [{"kind": "repel", "radius": 0.4, "strength": 1, "points": [)";
+    for (int k = 0; k <= 30; ++k) stroke += (k ? ", [" : "[") + std::to_string(-1.5 + 0.1 * k) + ", 1.0, 0.1]";
+    stroke += "]}]";
+  }
+  const std::string plant =
+      model == "climb"     ? R"({"name": "ivy", "position": [0, 0, 0.15], "seed": 2, "species": {"base": "japanese-ivy"}})"
+      : model == "lsystem" ? R"({"name": "ivy", "model": "lsystem", "grammar": "japanese-ivy", "position": [0, 0, 0.15], "seed": 2})"
+                           : R"({"name": "ivy", "model": "particles", "position": [0, 0.05, 0.13], "seed": 2,
+                                "species": {"base": "ivy-particles", "max_particles": 2500}})";
+  const std::string json = R"({"tendril": 1, "seed": 4, "environment": {"obstacles": [
+        {"name": "ground", "type": "plane", "size": [10, 10]},
+        {"name": "wall", "type": "wall", "size": [3, 2.5, 0.2]}],
+      "lights": [{"type": "directional", "direction": [0, -1, -0.4]}])" + stroke + R"(},
+    "plants": [)" + plant + "]}";
+  session::Session s(scene::parseScene(parseJson(json, "test scene"), "test scene", test::sourceDir()));
+  s.run(model == "climb" ? 260 : model == "lsystem" ? 220 : 900);
+  const plant::PlantModel p = s.plants().at(0);
+  Band b;
+  b.stems = p.nodeCount();
+  for (size_t i = 0; i < p.nodeCount(); ++i) {
+    if (p.flags[i] & plant::kNodeBroken) continue;
+    b.top = std::max(b.top, p.position[i].y());
+    b.inside += inBandRegion(p.position[i]);
+  }
+  return b;
+}
+
+TEST(PaintedStrokes, ARepellingStrokeStopsTheShootsOfEveryModelThatReachIt) {
+  for (const std::string model : {"climb", "lsystem", "particles"}) {
+    SCOPED_TRACE(model);
+    const Band free = growUnderBand(model, false), held = growUnderBand(model, true);
+    std::printf("%s: without the band %zu stems up to %.2f m, %zu in its region; with it %zu stems up to %.2f m, %zu "
+                "in its region\n",
+                model.c_str(), free.stems, free.top, free.inside, held.stems, held.top, held.inside);
+    EXPECT_GT(free.inside, 10u) << "without the band the plant climbs through its region";
+    EXPECT_EQ(held.inside, 0u) << "no shoot grows into the region the band keeps clear";
+    EXPECT_GT(held.stems, 100u);
+  }
 }
 
 // --- friction and elasticity (§5.2) ---

@@ -356,7 +356,8 @@ void ClimbSystem::growTip(const Plant& plant, const Tip& tip, const env::Environ
   // Program 1: Tip -> segment(Tip) Tip.
   const Vec3 growDir = turned ? Vec3((windTurn * t.dir).normalized()) : t.dir;
   std::optional<Segment> segment = placeSegment(s, t, growDir, climbing, rng(kPurposeHold), env);
-  if (!segment) {  // boxed in: nowhere to grow
+  // Boxed in (nowhere to grow), or grown into a region a repelling stroke keeps growth out of.
+  if (!segment || env.repelled(segment->end)) {
     out.dies = true;
     out.why = plant::TipEnd::Blocked;
     return;

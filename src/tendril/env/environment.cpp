@@ -114,6 +114,21 @@ struct Environment::StrokeGrid {
   Eigen::Vector3i cellOf(const Vec3& p) const {
     return Eigen::Vector3i(int(std::floor(p.x() / cell)), int(std::floor(p.y() / cell)), int(std::floor(p.z() / cell)));
   }
+  // Calls f(point index) for the points in the cells round p (every point within the largest
+  // stroke radius of p among them); stops early when f returns true.
+  template <class F>
+  bool anyNear(const Vec3& p, F&& f) const {
+    const Eigen::Vector3i c = cellOf(p);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          auto it = cells.find(key(c.x() + dx, c.y() + dy, c.z() + dz));
+          if (it == cells.end()) continue;
+          for (uint32_t i : it->second)
+            if (f(i)) return true;
+        }
+    return false;
+  }
 };
 
 namespace {
@@ -894,28 +909,35 @@ LightSample Environment::light(const Vec3& p) const {
 Vec3 Environment::attraction(const Vec3& p) const {
   const StrokeGrid& g = *strokeGrid_;
   if (g.points.empty()) return Vec3::Zero();
-  Eigen::Vector3i c = g.cellOf(p);
   Vec3 sum = Vec3::Zero();
   float weightSum = 0.0f, maxWeight = 0.0f;
-  for (int dz = -1; dz <= 1; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        auto it = g.cells.find(StrokeGrid::key(c.x() + dx, c.y() + dy, c.z() + dz));
-        if (it == g.cells.end()) continue;
-        for (uint32_t i : it->second) {
-          const Stroke& s = strokes_[g.stroke[i]];
-          Vec3 d = g.points[i] - p;
-          float dist = d.norm();
-          if (dist >= s.radius || dist < 1e-6f) continue;
-          float w = (1.0f - dist / s.radius);
-          w *= w;
-          sum += w * (s.attract ? s.strength : -s.strength) * (d / dist);
-          weightSum += w;
-          maxWeight = std::max(maxWeight, w);
-        }
-      }
+  g.anyNear(p, [&](uint32_t i) {
+    const Stroke& s = strokes_[g.stroke[i]];
+    Vec3 d = g.points[i] - p;
+    float dist = d.norm();
+    if (dist >= s.radius || dist < 1e-6f) return false;
+    float w = (1.0f - dist / s.radius);
+    w *= w;
+    sum += w * (s.attract ? s.strength : -s.strength) * (d / dist);
+    weightSum += w;
+    maxWeight = std::max(maxWeight, w);
+    return false;
+  });
   if (weightSum <= 0.0f) return Vec3::Zero();
   return sum / weightSum * maxWeight;
+}
+
+bool Environment::repelled(const Vec3& p) const {
+  const StrokeGrid& g = *strokeGrid_;
+  if (g.points.empty()) return false;
+  return g.anyNear(p, [&](uint32_t i) {
+    const Stroke& s = strokes_[g.stroke[i]];
+    if (s.attract) return false;
+    const float dist = (g.points[i] - p).norm();
+    if (dist >= s.radius) return false;
+    const float w = 1.0f - dist / s.radius;
+    return s.strength * w * w >= 0.5f;
+  });
 }
 
 Vec3 Environment::wind(const Vec3& p, float t) const { return wind_.sample(p, t); }

@@ -235,6 +235,10 @@ class Environment {
   // stroke point within its radius), weights (1 − d/r)², scaled by the largest weight.
   // Zero when no stroke is near.
   Vec3 attraction(const Vec3& p) const;
+  // Whether p lies in the region a repelling stroke keeps growth out of: where one of its
+  // points weighs half or more, strength·(1 − d/r)² ≥ ½ (within 0.29 r at strength 1). The
+  // models stop a shoot that reaches it; around it the stroke steers growth away (attraction).
+  bool repelled(const Vec3& p) const;
   // Wind velocity (m/s) at p and time t: the wind field (constant, gusty, emitter jets or SPH air).
   Vec3 wind(const Vec3& p, float t) const;
 

@@ -12,7 +12,7 @@ std::pair<int, int> queryArity(QueryKind kind) {
     case QueryKind::Surface:
     case QueryKind::Hit: return {2, 6};
     case QueryKind::Light: return {1, 5};
-    case QueryKind::Attract: return {1, 4};
+    case QueryKind::Attract: return {1, 5};
     case QueryKind::Facing: return {3, 7};
   }
   return {1, 6};

@@ -735,6 +735,7 @@ void answer(const EnvRequest& r, float* p, uint32_t n, const env::Environment* e
     }
     case QueryKind::Attract: {
       putVec(1, env ? env->attraction(r.pos) : Vec3::Zero());
+      put(4, env && env->repelled(r.pos) ? 1.0f : 0.0f);
       return;
     }
     case QueryKind::Facing: {

@@ -140,7 +140,7 @@ std::optional<GrowthProblem> diagnoseGrowth(const PlantSystem& system, size_t in
       seedBlocked();
     } else {
       p.cause = GrowthCause::Blocked;
-      why = "obstacles leave its shoots no room to grow";
+      why = "obstacles (or strokes painted to repel growth) leave its shoots no room to grow";
     }
   } else if (recorded == plant::TipEnd::NoSupport) {
     p.cause = GrowthCause::NoSupport;

@@ -16,7 +16,7 @@ namespace tendril::models {
 
 enum class GrowthCause : uint8_t {
   SeedBlocked,  // the seed's growth direction meets an obstacle close by (a seed under a car)
-  Blocked,      // obstacles leave its shoots no room to grow
+  Blocked,      // obstacles (or repelling strokes) leave its shoots no room to grow
   NoSupport,    // a climber with nothing to climb within reach
   NoLight,      // too little light for its growth rate
   Crowded,      // other stems already fill the space its shoots grow into

@@ -131,7 +131,8 @@ struct ParticleWorld::ApexUpdate {
   float halfLength = 0.0f;
   bool grown = false;
   bool anchor = false;
-  bool dormant = false;  // crowded: the apex stops growing
+  bool dormant = false;  // the apex stops growing (crowded, or in a region painted to repel growth)
+  plant::TipEnd stop = plant::TipEnd::Crowded;  // why, when dormant
   Vec3 anchorPoint = Vec3::Zero();
   Vec3 leafUp = Vec3::Zero();  // preferred leaf normal here (away from the surface / to the light)
   bool leafOnSupport = false;  // leafUp is a support's normal: blades lie on it
@@ -176,6 +177,13 @@ void ParticleWorld::decideApex(uint32_t i, const env::Environment& env, ApexUpda
   const bool turned = turn.coeffs() != Quat::Identity().coeffs();
   const Vec3 forward = turned ? Vec3((turn.conjugate() * q_[i]) * Vec3::UnitY()) : Vec3(q_[i] * Vec3::UnitY());
   Vec3 vf = forward;
+  // A shoot that reached the region a repelling stroke keeps growth out of stops there (the
+  // stroke steers the shoots round it away, below): what the user painted stays clear.
+  if (env.repelled(head(i))) {
+    u.dormant = true;
+    u.stop = plant::TipEnd::Blocked;
+    return;
+  }
 
   // Light (eq. 7's occlusion O counts obstacles by shadow rays and plants by coverage).
   const env::LightSample light = env.light(x_[i]);
@@ -252,8 +260,7 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
   Plant& pl = plants_[plant_[i]];
   const ParticleSpecies& s = pl.species;
   if (u.dormant) {
-    flags_[i] = (flags_[i] & ~(kApex | plant::kNodeTipEndMask)) |
-                (uint32_t(plant::TipEnd::Crowded) << plant::kNodeTipEndShift);
+    flags_[i] = (flags_[i] & ~(kApex | plant::kNodeTipEndMask)) | (uint32_t(u.stop) << plant::kNodeTipEndShift);
     return;
   }
   // Eq. 9: R = R R_g, R̄ = R̄ R⁻¹ R_g — the growth rotation enters the current and the rest

@@ -36,7 +36,7 @@ enum NodeFlags : uint32_t {
 enum class TipEnd : uint8_t {
   Unknown = 0,  // not recorded (the model does not say, or the branch was cut)
   NoSupport,    // a climbing shoot went too long without a support in reach
-  Blocked,      // obstacles left it nowhere to grow
+  Blocked,      // obstacles (or a repelling stroke, Environment::repelled) left it nowhere to grow
   Crowded,      // its own or other plants' stems already fill the space ahead
   Capped,       // the plant reached a cap (max segments, max particles)
   Shortened,    // its internodes became shorter than the species' minimum (wind, decrease)
