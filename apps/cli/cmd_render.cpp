@@ -36,6 +36,7 @@ struct RenderOptions {
   int samples = 4;
   bool noShadows = false;
   bool air = false;
+  bool noStrokes = false;
   CommonOptions common;
 };
 
@@ -84,6 +85,7 @@ int runRender(const RenderOptions& o) {
   double growSeconds = total.seconds();
 
   render::SessionScene view(session, o.air);
+  if (o.noStrokes) view.scene().strokes.clear();
   const float aspect = float(o.width) / float(o.height);
   render::Camera camera = render::frameBounds(render::focusBounds(view.scene()), render::kDefaultViewDirection, aspect,
                                               radians(float(o.fov)));
@@ -131,6 +133,7 @@ RegisterCommand registerRender("render", "Grow every plant of a scene and render
   sub.add_option("--samples", o->samples, "Multisample anti-aliasing samples (1 = off)")->check(CLI::Range(1, 64))
       ->capture_default_str();
   sub.add_flag("--no-shadows", o->noShadows, "Render without the shadow map");
+  sub.add_flag("--no-strokes", o->noStrokes, "Leave out the painted strokes (drawn as dots otherwise)");
   sub.add_flag("--air", o->air, "Also draw the simulated air (wind mode \"sph\") as streaks coloured by speed");
   addCommonOptions(sub, o->common);
   return [o] { return runRender(*o); };

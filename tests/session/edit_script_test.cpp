@@ -25,6 +25,9 @@ const char* kScript = R"({"tendril_edits": 1, "edits": [
   {"at_step": 33, "edit": "drag_move", "target": [0.3, 0.25, 0.2]},
   {"at_step": 36, "edit": "drag_end"},
   {"at_step": 36, "edit": "cut", "plant": 1, "node": 4},
+  {"at_step": 37, "edit": "paint_stroke", "kind": "repel", "radius": 0.2, "strength": 1, "points": [[0.6, 0.3, 0.02]]},
+  {"at_step": 37, "edit": "cut", "plant": 0, "inside": {"min": [-1, 0.12, -1], "max": [1, 2, 1]},
+   "remove": true},
   {"at_step": 38, "edit": "add_emitter", "position": [-1, 0.4, 0.2], "direction": [1, 0, 0], "speed": 3},
   {"at_step": 38, "edit": "set_species", "plant": 0, "species": {"particle_length": 0.05}},
   {"at_step": 39, "edit": "undo"},
@@ -59,6 +62,18 @@ TEST(EditScript, ErrorsNameTheFileAndPointer) {
             std::string::npos);
   EXPECT_NE(scriptError(R"({"tendril_edits": 1, "edits": [{"at_step": 0, "edit": "cut", "plant": 0}]})")
                 .find("edits.json:/edits/0/node"),
+            std::string::npos);
+  EXPECT_NE(scriptError(R"({"tendril_edits": 1, "edits": [{"at_step": 0, "edit": "cut", "plant": 0, "node": 1,
+                           "inside": {"min": [0, 0, 0], "max": [1, 1, 1]}}]})")
+                .find("edits.json:/edits/0/inside"),
+            std::string::npos);
+  EXPECT_NE(scriptError(R"({"tendril_edits": 1, "edits": [{"at_step": 0, "edit": "cut", "plant": 0,
+                           "inside": {"min": [0, 0, 0], "max": [1, -1, 1]}}]})")
+                .find("edits.json:/edits/0/inside/max"),
+            std::string::npos);
+  EXPECT_NE(scriptError(R"({"tendril_edits": 1, "edits": [{"at_step": 0, "edit": "cut", "plant": 0,
+                           "inside": {"min": [0, 0, 0]}}]})")
+                .find("edits.json:/edits/0/inside/max"),
             std::string::npos);
   EXPECT_NE(scriptError(R"({"tendril_edits": 1, "edits": [{"at_step": 5, "edit": "undo"},
                                                           {"at_step": 2, "edit": "redo"}]})")

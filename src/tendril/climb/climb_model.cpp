@@ -41,7 +41,7 @@ class ClimbPlantSystem final : public models::PlantSystem, public models::Growth
   plant::GrowthFlowSpecies growthFlow(size_t plant) const override { return growthFlow_[plant]; }
   void saveState(ArchiveWriter& out) const override { system_.saveState(out); }
   void loadState(ArchiveReader& in) override { system_.loadState(in); }
-  void cut(size_t plant, uint32_t node) override { system_.cut(uint32_t(plant), node); }
+  void cut(size_t plant, uint32_t node, bool /*remove: always*/) override { system_.cut(uint32_t(plant), node); }
   const models::GrowthGauge* growthGauge() const override { return this; }
   const models::ObstacleHold* obstacleHold() const override { return this; }
   using models::PlantSystem::obstacleHold;

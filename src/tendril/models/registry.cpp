@@ -17,6 +17,6 @@ void PlantSystem::setParams(size_t /*plant*/, const PlantSpec& spec) {
   throw Error("", "", "plants of model \"" + spec.model + "\" cannot change their settings while growing");
 }
 
-void PlantSystem::cut(size_t /*plant*/, uint32_t /*node*/) { throw Error("", "", "plants of this model cannot be cut"); }
+void PlantSystem::cut(size_t /*plant*/, uint32_t /*node*/, bool /*remove*/) { throw Error("", "", "plants of this model cannot be cut"); }
 
 }  // namespace tendril::models

@@ -60,9 +60,10 @@ class PlantSystem {
   virtual void regrow(size_t plant, const models::PlantSpec& spec, const env::Environment& /*env*/) {
     setParams(plant, spec);
   }
-  // Removes the node's segment and everything beyond it (interactive cuts, seed 000 §5.1).
+  // Removes the node's segment and everything beyond it (interactive cuts, seed 000 §5.1): a
+  // piece that can fall (particle plants) falls unless `remove` (pruning: it is gone at once).
   // Throws Error for a model that cannot be cut or a node out of range.
-  virtual void cut(size_t plant, uint32_t node);
+  virtual void cut(size_t plant, uint32_t node, bool remove = false);
 
   // --- capabilities (models/capabilities.h): null where the model does not have one ---
   virtual const Grip* grip() const { return nullptr; }

@@ -67,11 +67,11 @@ void ParticlePlantSystem::setParams(size_t plant, const models::PlantSpec& spec)
   world_.setSpecies(uint32_t(plant), params->species);
 }
 
-void ParticlePlantSystem::cut(size_t plant, uint32_t node) {
+void ParticlePlantSystem::cut(size_t plant, uint32_t node, bool remove) {
   const std::vector<uint32_t> particles = world_.snapshotParticles(uint32_t(plant));
   if (node >= particles.size())
     throw Error("", "", fmt::format("plant {} has no node {} (it has {})", plant, node, particles.size()));
-  world_.cut(particles[node]);
+  world_.cut(particles[node], remove);
 }
 
 void ParticlePlantSystem::requireHandle(size_t plant, uint32_t handle, const std::string& what) const {

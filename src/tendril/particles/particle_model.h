@@ -42,7 +42,7 @@ class ParticlePlantSystem final : public models::PlantSystem,
   void loadState(ArchiveReader& in) override { world_.loadState(in); }
   void setParams(size_t plant, const models::PlantSpec& spec) override;
   // The node's particle and everything beyond it fall and disappear (ParticleWorld::cut).
-  void cut(size_t plant, uint32_t node) override;
+  void cut(size_t plant, uint32_t node, bool remove) override;
 
   const models::Grip* grip() const override { return this; }
   const models::BranchSeeding* branchSeeding() const override { return this; }

@@ -337,10 +337,19 @@ void ParticleWorld::markDetached(uint32_t root) {
   }
 }
 
-void ParticleWorld::cut(uint32_t particle) {
+void ParticleWorld::cut(uint32_t particle, bool remove) {
   if (particle >= capacity() || !(flags_[particle] & kActive) || (flags_[particle] & kRoot)) return;
   unlink(particle);
   markDetached(particle);
+  if (!remove) return;
+  std::vector<uint32_t> piece, stack = {particle};
+  while (!stack.empty()) {
+    const uint32_t i = stack.back();
+    stack.pop_back();
+    piece.push_back(i);
+    for (uint32_t c = firstChild_[i]; c != kNone; c = nextSibling_[c]) stack.push_back(c);
+  }
+  for (uint32_t i : piece) release(i);
 }
 
 uint32_t ParticleWorld::seedBranch(uint32_t particle, const Vec3& direction) {

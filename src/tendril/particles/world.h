@@ -124,8 +124,9 @@ class ParticleWorld final : public models::AirCoupling {
   // Pulls a particle toward `target` through a soft constraint of the given strength (0–1).
   void setDrag(uint32_t particle, const Vec3& target, float strength);
   void clearDrag();
-  // Cuts the connection above `particle`: it and everything beyond it fall and disappear.
-  void cut(uint32_t particle);
+  // Cuts the connection above `particle`: it and everything beyond it fall and disappear, or,
+  // with `remove`, are removed at once (pruning).
+  void cut(uint32_t particle, bool remove = false);
   // A new lateral apex on a grown branch particle, growing along `direction`.
   uint32_t seedBranch(uint32_t particle, const Vec3& direction);
   // Removes detached pieces that have come to rest (also done automatically, see settings).

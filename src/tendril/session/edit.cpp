@@ -159,6 +159,31 @@ void EditApplier::operator()(const SeedBranch& e) const {
 
 void EditApplier::operator()(const Cut& edit) const {
   requirePlant(s, edit.plant, "cut");
+  if (edit.inside) {
+    // One branch at a time, found again after each cut (a cut may renumber the nodes): the
+    // first node inside the box on a path from the root, of what is still part of the plant.
+    size_t lastNode = SIZE_MAX, lastCount = SIZE_MAX;
+    for (size_t guard = 0; guard < 100000; ++guard) {
+      const plant::PlantModel p = std::as_const(s).system(edit.plant).snapshot(s.indexInSystem(edit.plant));
+      // A segment is inside if its start, middle or tip is.
+      auto in = [&](size_t i) {
+        if (p.flags[i] & plant::kNodeBroken) return false;
+        const Vec3 a = p.position[i], b = p.tip(i);
+        return edit.inside->contains(a) || edit.inside->contains(0.5f * (a + b)) || edit.inside->contains(b);
+      };
+      size_t node = p.nodeCount();
+      for (size_t i = 0; i < p.nodeCount() && node == p.nodeCount(); ++i)
+        if (p.parent[i] >= 0 && in(i) && !in(size_t(p.parent[i]))) node = i;
+      if (node == p.nodeCount() || (node == lastNode && p.nodeCount() == lastCount)) break;  // done, or stuck
+      lastNode = node, lastCount = p.nodeCount();
+      Cut one;
+      one.plant = edit.plant;
+      one.node = uint32_t(node);
+      one.remove = edit.remove;
+      (*this)(one);
+    }
+    return;
+  }
   Cut e = edit;
   if (e.particle != Cut::kByNode) {
     const models::Grip& g = capability(s, e.plant, &models::PlantSystem::grip, "cut");
@@ -183,7 +208,7 @@ void EditApplier::operator()(const Cut& edit) const {
     }
   }
   try {
-    s.system(e.plant).cut(s.indexInSystem(e.plant), e.node);
+    s.system(e.plant).cut(s.indexInSystem(e.plant), e.node, e.remove);
   } catch (const Error& err) {
     throw Error("cut", "/node", fmt::format("plant {} (model \"{}\"): {}", e.plant, s.plantSpec(e.plant).model,
                                             err.message()));
@@ -195,7 +220,7 @@ void EditApplier::operator()(const Cut& edit) const {
     if (held.empty()) break;
     const auto [plant, node] = held.back();
     const size_t before = std::as_const(s).system(plant).segmentCount();
-    s.system(plant).cut(s.indexInSystem(plant), node);
+    s.system(plant).cut(s.indexInSystem(plant), node, e.remove);
     if (std::as_const(s).system(plant).segmentCount() == before) break;  // nothing came off: stop
   }
 }
@@ -410,8 +435,10 @@ Json editToJson(const Edit& edit) {
                  },
                  [&](const Cut& e) {
                    j["plant"] = e.plant;
-                   if (e.particle != Cut::kByNode) j["particle"] = e.particle;
+                   if (e.inside) j["inside"] = {{"min", vec3Json(e.inside->min)}, {"max", vec3Json(e.inside->max)}};
+                   else if (e.particle != Cut::kByNode) j["particle"] = e.particle;
                    else j["node"] = e.node;
+                   if (e.remove) j["remove"] = true;
                  },
                  [&](const DragBegin& e) {
                    j["plant"] = e.plant, j["particle"] = e.particle, j["target"] = vec3Json(e.target);
@@ -489,8 +516,22 @@ Edit readEdit(JsonObject& o) {
   if (kind == "cut") {
     Cut e;
     e.plant = readIndex(o, "plant");
+    e.remove = o.boolean("remove", false);
+    if (o.has("inside")) {
+      if (o.has("particle") || o.has("node"))
+        throw o.error("inside", "a cut takes \"node\", \"particle\" or \"inside\", one of them");
+      JsonObject box = o.object("inside");
+      Bounds3 b;
+      b.min = box.requiredVec3("min");
+      b.max = box.requiredVec3("max");
+      if (!(b.min.array() < b.max.array()).all()) throw box.error("max", "must be above \"min\" on every axis");
+      box.finish();
+      e.inside = b;
+      return e;
+    }
     if (!o.has("particle") && !o.has("node"))
-      throw o.error("node", "is required (the segment to cut; or \"particle\": the part of a particle plant)");
+      throw o.error("node", "is required (the segment to cut; or \"particle\": the part of a particle plant; or "
+                            "\"inside\": a box)");
     if (o.has("particle") && o.has("node")) throw o.error("particle", "a cut takes \"node\" or \"particle\", not both");
     if (o.has("particle")) e.particle = readIndex(o, "particle");
     else e.node = readIndex(o, "node");

@@ -57,11 +57,17 @@ struct SeedBranch {
 // is a node of the plant's snapshot or, on plants whose parts have handles (particle plants),
 // the node holding a handle: handles keep their number while the plant grows on, node indices
 // follow the snapshot's order, so scripts written for a later step say `particle`.
+// Or, with `inside`, every branch of the plant where it enters the box (pruning a region: the
+// first segment on each path from the root with its start, middle or tip inside, whatever the
+// plant grew by then). With `remove` the pieces cut off are removed at once, as the paper's
+// pruning does, instead of falling.
 struct Cut {
   static constexpr uint32_t kByNode = std::numeric_limits<uint32_t>::max();
   uint32_t plant = 0;
   uint32_t node = 0;             // node index in the plant's snapshot (NodePick::node)
   uint32_t particle = kByNode;   // or: the node holding this handle (NodePick::particle)
+  std::optional<Bounds3> inside;  // or: every branch where it enters this box
+  bool remove = false;            // the cut-off pieces are removed at once rather than falling (pruning)
 };
 
 // A drag gesture on a particle plant through a soft constraint (§5.1): begin, any number of
