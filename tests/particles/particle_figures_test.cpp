@@ -86,6 +86,111 @@ TEST(ParticleFigures, Fig11sPlantsOnTheFenceGrowTowardTheLightFromTheUpperLeft) 
   EXPECT_LE(countBelow(right, -0.02), 1u) << "almost every plant leans right";
 }
 
+// --- Fig. 1: a car covered as the artist paints it, its windows and lights pruned ---
+
+// The figure's session as examples/edits/particles-fig01-car.json gives it: three ivies at the
+// sills of a car from a mesh file; attractors painted along both sides, on the hood and on the
+// trunk while they grow (each stroke also seeds a branch near it, §5.1); then every branch over
+// the windows and the lights is cut (`cut` with `inside`: the script's boxes) and repelling
+// strokes are painted over them, and growth goes on. `attractors` / `repellers` false leave
+// those strokes out of the script.
+struct Fig1 {
+  size_t stemsBeforeCut = 0, overGlassBeforeCut = 0;  // over the windows and lights, at the cut's step
+  size_t overGlassAfterCut = 0, stemsAfterCut = 0;    // right after the cuts
+  size_t detachedAfterCut = 0;                        // particles cut off and left (the cuts remove them)
+  size_t mostOverGlassLater = 0;                      // the most at any later check (every 50 steps)
+  size_t stemsAtEnd = 0;
+  double covered = 0.0;  // share of the painted attractor points with a stem within 10 cm, at the end
+};
+
+Fig1 replayFig1(bool attractors, bool repellers, uint32_t steps) {
+  auto s = session::Session::open(scenePath("particles-fig01-car.json"));
+  session::Editor editor(*s);
+  const session::EditScript script = session::loadEditScript(test::sourceDir() / "examples/edits/particles-fig01-car.json");
+  const ParticleWorld& w = *test::particleWorld(*s);
+  std::vector<Bounds3> boxes;
+  std::vector<Vec3> painted;
+  uint32_t cutStep = 0;
+  for (const session::TimedEdit& t : script.edits) {
+    if (const auto* c = std::get_if<session::Cut>(&t.edit); c && c->inside) boxes.push_back(*c->inside), cutStep = t.atStep;
+    if (const auto* p = std::get_if<session::PaintStroke>(&t.edit); p && p->stroke.attract)
+      painted.insert(painted.end(), p->stroke.points.begin(), p->stroke.points.end());
+  }
+  EXPECT_GE(boxes.size(), 8u) << "the script prunes the windows and the lights";
+  EXPECT_GE(painted.size(), 40u);
+  auto stems = [&] {
+    std::vector<Vec3> out;
+    for (uint32_t i = 0; i < w.capacity(); ++i)
+      if (w.active(i) && !(w.flags(i) & (kLeaf | kDetached | kRoot))) out.push_back(w.position(i));
+    return out;
+  };
+  auto overGlass = [&] {
+    size_t n = 0;
+    for (const Vec3& x : stems()) n += std::any_of(boxes.begin(), boxes.end(), [&](const Bounds3& b) { return b.contains(x); });
+    return n;
+  };
+  Fig1 f;
+  bool cut = false;
+  for (const session::TimedEdit& t : script.edits) {
+    if (const auto* p = std::get_if<session::PaintStroke>(&t.edit)) {
+      if (p->stroke.attract ? !attractors : !repellers) continue;
+    }
+    if (t.atStep > editor.stepsRun()) editor.step(t.atStep - editor.stepsRun());
+    if (std::holds_alternative<session::Cut>(t.edit) && !cut) {
+      cut = true;
+      f.stemsBeforeCut = stems().size();
+      f.overGlassBeforeCut = overGlass();
+    }
+    editor.apply(t.edit);
+  }
+  f.overGlassAfterCut = overGlass();
+  f.stemsAfterCut = stems().size();
+  for (uint32_t i = 0; i < w.capacity(); ++i) f.detachedAfterCut += w.active(i) && (w.flags(i) & kDetached);
+  EXPECT_EQ(editor.stepsRun(), cutStep);
+  while (editor.stepsRun() < steps) {
+    editor.step(50);
+    const size_t over = overGlass();
+    if (over > f.mostOverGlassLater && repellers)
+      for (const Vec3& x : stems())
+        if (std::any_of(boxes.begin(), boxes.end(), [&](const Bounds3& b) { return b.contains(x); }))
+          std::printf("Fig. 1: step %u, a stem over the glass at (%.3f, %.3f, %.3f)\n", editor.stepsRun(), x.x(), x.y(), x.z());
+    f.mostOverGlassLater = std::max(f.mostOverGlassLater, over);
+  }
+  const std::vector<Vec3> end = stems();
+  f.stemsAtEnd = end.size();
+  size_t near = 0;
+  for (const Vec3& p : painted)
+    near += std::any_of(end.begin(), end.end(), [&](const Vec3& x) { return (x - p).squaredNorm() < 0.01f; });
+  f.covered = double(near) / double(painted.size());
+  return f;
+}
+
+TEST(ParticleFigures, Fig1sPaintedCarIsCoveredAndItsPrunedWindowsAndLightsStayClear) {
+  const uint32_t end = 1300;
+  const Fig1 f = replayFig1(true, true, end), noRepellers = replayFig1(true, false, end);
+  const Fig1 noAttractors = replayFig1(false, true, 850);
+  auto report = [](const char* what, const Fig1& r) {
+    std::printf("Fig. 1 %s: %zu stems at the cut, %zu over the windows and lights; %zu stems and %zu over them right "
+                "after it, at most %zu over them later; %zu stems at the end, painted points covered %.0f%%\n",
+                what, r.stemsBeforeCut, r.overGlassBeforeCut, r.stemsAfterCut, r.overGlassAfterCut, r.mostOverGlassLater,
+                r.stemsAtEnd, 100.0 * r.covered);
+  };
+  report("(the script)", f);
+  report("(no repelling strokes)", noRepellers);
+  report("(no attractors)", noAttractors);
+  // The painted attractors draw the plants over the body rather than over the glass.
+  EXPECT_GE(f.covered, 0.9) << "the plants cover the painted regions";
+  EXPECT_GT(noAttractors.overGlassBeforeCut, 300u) << "without attractors the ivy climbs the windows";
+  EXPECT_LT(5 * f.overGlassBeforeCut, noAttractors.overGlassBeforeCut);
+  // Pruned, the windows and lights are clear, and stay clear while the plants grow on.
+  EXPECT_EQ(f.overGlassAfterCut, 0u);
+  EXPECT_EQ(f.detachedAfterCut, 0u) << "the pruned branches are removed, not left to fall";
+  EXPECT_EQ(f.mostOverGlassLater, 0u) << "the pruned windows and lights stay clear";
+  EXPECT_GT(double(f.stemsAtEnd), 1.15 * double(f.stemsAfterCut)) << "while growth goes on";
+  // Without the repelling strokes the ivy grows back over them.
+  EXPECT_GT(noRepellers.mostOverGlassLater, 100u);
+}
+
 // --- Fig. 9: moving a box ---
 
 // Stem particles deeper than 2 mm inside any obstacle.
