@@ -124,9 +124,12 @@ Fig1 replayFig1(bool attractors, bool repellers, uint32_t steps) {
       if (w.active(i) && !(w.flags(i) & (kLeaf | kDetached | kRoot))) out.push_back(w.position(i));
     return out;
   };
+  auto onGlass = [&](const Vec3& x) {
+    return std::any_of(boxes.begin(), boxes.end(), [&](const Bounds3& b) { return b.contains(x); });
+  };
   auto overGlass = [&] {
     size_t n = 0;
-    for (const Vec3& x : stems()) n += std::any_of(boxes.begin(), boxes.end(), [&](const Bounds3& b) { return b.contains(x); });
+    for (const Vec3& x : stems()) n += onGlass(x);
     return n;
   };
   Fig1 f;
@@ -152,7 +155,7 @@ Fig1 replayFig1(bool attractors, bool repellers, uint32_t steps) {
     const size_t over = overGlass();
     if (over > f.mostOverGlassLater && repellers)
       for (const Vec3& x : stems())
-        if (std::any_of(boxes.begin(), boxes.end(), [&](const Bounds3& b) { return b.contains(x); }))
+        if (onGlass(x))
           std::printf("Fig. 1: step %u, a stem over the glass at (%.3f, %.3f, %.3f)\n", editor.stepsRun(), x.x(), x.y(), x.z());
     f.mostOverGlassLater = std::max(f.mostOverGlassLater, over);
   }
