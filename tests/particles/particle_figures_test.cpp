@@ -463,8 +463,8 @@ Cover columnCover(const ParticleWorld& w) {
   return c;
 }
 
-// The particle dynamics amplify the last bit of a float: the same scene grows visibly other
-// plants on another CPU (glibc's and Embree's kernels differ), on one of them a shoot leaving
+// The particle dynamics amplify the last bit of a float: the same scene grew visibly other
+// plants on another CPU while Embree chose its kernels by CPU, on one of them a shoot leaving
 // the column's foot bare. The figure's claim is what the method does on such a column, so it
 // is measured over the scene's seed and the next two: the median run covers the column.
 TEST(ParticleFigures, Fig14sColumnIsCoveredToTheTopWithTable1sParticleCount) {

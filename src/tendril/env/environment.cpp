@@ -29,7 +29,12 @@ RTCDevice embreeDevice() { return environmentDevice(); }
 
 RTCDevice environmentDevice() {
   static RTCDevice device = [] {
-    RTCDevice d = rtcNewDevice(nullptr);
+    // Embree picks its kernels by CPU, and its 4-, 8- and 16-wide kernels answer some queries with
+    // other last bits (a closest point, a hit distance), which growth then amplifies. Asking for the
+    // AVX2 kernels wherever the CPU has them gives the same plants on every such machine (an AVX-512
+    // one included); elsewhere Embree chooses, and results are the same only among like CPUs.
+    static const bool hasAvx2 = __builtin_cpu_supports("avx2");
+    RTCDevice d = rtcNewDevice(hasAvx2 ? "isa=avx2" : nullptr);
     if (!d) throw Error("Embree", "", "cannot create the ray tracing device");
     rtcSetDeviceErrorFunction(
         d, [](void*, RTCError code, const char* str) { log::error("Embree error {}: {}", int(code), str ? str : ""); },
