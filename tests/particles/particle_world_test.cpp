@@ -200,6 +200,70 @@ double meanX(const Vec3& lightDirection) {
   return n ? sum / double(n) : 0.0;
 }
 
+// The particles in the subtree of every particle of `plant` (itself included, leaves too).
+std::vector<size_t> subtreeSizes(const ParticleWorld& w, uint32_t plant) {
+  std::vector<size_t> size(w.capacity(), 0);
+  for (uint32_t i = 0; i < w.capacity(); ++i) {
+    if (!w.active(i) || w.plantOf(i) != plant || (w.flags(i) & kDetached)) continue;
+    for (uint32_t q = i; q != kNone; q = w.parent(q)) ++size[q];
+  }
+  return size;
+}
+
+// The warning says "raise the species' max_particles to grow further", and pruning a plant at
+// its cap should let it grow back: a plant stopped at max_particles grows on once it has room
+// for a twentieth of the cap again, and not after losing a particle or two (which would start and
+// stop it over and over).
+TEST(ParticleGrowth, ACappedPlantGrowsOnWhenPrunedOrItsCapIsRaised) {
+  auto env = makeEnv(kGroundAndWall);
+  ParticleWorld w;
+  ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
+  s.maxParticles = 400;
+  const uint32_t p = w.addPlant("ivy", s, Vec3(0, 0.03f, 0.11f), Vec3(0, 1, 0), 1, *env);
+  int k = 0;
+  while (w.growthReading(p).cap.empty() && k < 3000) w.step(*env), ++k;
+  ASSERT_FALSE(w.growthReading(p).cap.empty()) << "the plant reaches its cap";
+  for (int j = 0; j < 40; ++j) w.step(*env);
+  const size_t capped = w.particleCount(p);
+  EXPECT_LE(capped, 400u);
+  EXPECT_FALSE(w.growthReading(p).growing);
+
+  // A cut that removes a few particles leaves it stopped.
+  auto cutSubtree = [&](size_t lo, size_t hi) {
+    const std::vector<size_t> size = subtreeSizes(w, p);
+    for (uint32_t i = 0; i < w.capacity(); ++i)
+      if (size[i] >= lo && size[i] <= hi && !(w.flags(i) & (kRoot | kLeaf))) {
+        w.cut(i, true);
+        return size[i];
+      }
+    return size_t(0);
+  };
+  const size_t few = cutSubtree(2, 5);
+  ASSERT_GT(few, 0u);
+  for (int j = 0; j < 100; ++j) w.step(*env);
+  EXPECT_EQ(w.particleCount(p), capped - few) << "a plant that lost " << few << " particles stays stopped";
+  EXPECT_FALSE(w.growthReading(p).cap.empty());
+
+  // Pruned by a quarter, it grows back to its cap.
+  const size_t pruned = cutSubtree(80, 200);
+  ASSERT_GT(pruned, 0u);
+  const size_t after = w.particleCount(p);
+  EXPECT_TRUE(w.growthReading(p).cap.empty() || after + 20 + 1 + 2 <= 400u);
+  for (int j = 0; j < 600; ++j) w.step(*env);
+  std::printf("capped at %zu particles; %zu cut off stay stopped; %zu pruned: %zu left, %zu after 600 steps\n", capped,
+              few, pruned, after, w.particleCount(p));
+  EXPECT_GT(w.particleCount(p), after + pruned / 2) << "the pruned plant grows back";
+  EXPECT_LE(w.particleCount(p), 400u);
+
+  // A raised cap lets it grow on.
+  const size_t before = w.particleCount(p);
+  s.maxParticles = 800;
+  w.setSpecies(p, s);
+  for (int j = 0; j < 600; ++j) w.step(*env);
+  EXPECT_GT(w.particleCount(p), before + 100) << "max_particles raised";
+  EXPECT_LE(w.particleCount(p), 800u);
+}
+
 TEST(ParticleGrowth, LightFromOneSideMakesThePlantLeanTowardIt) {
   // Light shining toward −x comes from +x: the plant leans to +x, and the other way round.
   const double towardPlus = meanX(Vec3(-1, -0.3f, 0));

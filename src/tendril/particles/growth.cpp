@@ -138,8 +138,30 @@ struct ParticleWorld::ApexUpdate {
   bool leafOnSupport = false;  // leafUp is a support's normal: blades lie on it
 };
 
+void ParticleWorld::resumeCappedPlants() {
+  // A plant stopped at max_particles grows on once it has room again: pruning (a cut that
+  // removes), pieces that broke off and were removed at rest, or a raised max_particles. Not at
+  // every particle freed: it waits for room for a twentieth of the cap, so that a plant shedding
+  // a few particles now and then does not start and stop (and warn) over and over.
+  for (uint32_t p = 0; p < plants_.size(); ++p) {
+    Plant& pl = plants_[p];
+    if (!pl.capped) continue;
+    const ParticleSpecies& s = pl.species;
+    const size_t room = size_t(std::max(s.maxParticles / 20, 1)) + 1 + size_t(std::max(s.maxLateralBuds, 0));
+    if (pl.particles + room > size_t(std::max(s.maxParticles, 0))) continue;
+    pl.capped = false;
+    // The tips that stopped for the cap grow on; the apices that waited for it resume by themselves.
+    const uint32_t cappedEnd = uint32_t(plant::TipEnd::Capped) << plant::kNodeTipEndShift;
+    for (uint32_t i = 0; i < capacity(); ++i)
+      if ((flags_[i] & kActive) && plant_[i] == p && !(flags_[i] & (kDetached | kLeaf | kApex)) &&
+          (flags_[i] & plant::kNodeTipEndMask) == cappedEnd && !hasBranchChild(i))
+        flags_[i] = (flags_[i] & ~plant::kNodeTipEndMask) | kApex;
+  }
+}
+
 void ParticleWorld::grow(const env::Environment& env) {
   if (step_ % kOcclusionInterval == 0) buildOcclusion(env);
+  resumeCappedPlants();
 
   std::vector<uint32_t> apices;
   for (uint32_t i = 0; i < capacity(); ++i)

@@ -228,6 +228,8 @@ class ParticleWorld final : public models::AirCoupling {
 
   // phases (dynamics.cpp, growth.cpp, collisions.cpp)
   void grow(const env::Environment& env);
+  // A plant stopped at its particle cap grows on once it has room again (see grow()).
+  void resumeCappedPlants();
   struct ApexUpdate;  // what an apex decided (growth.cpp)
   void decideApex(uint32_t i, const env::Environment& env, ApexUpdate& u) const;
   void applyApex(uint32_t i, const ApexUpdate& u, const env::Environment& env);
