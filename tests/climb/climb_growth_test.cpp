@@ -5,6 +5,7 @@
 #include "tendril/climb/climb_model.h"
 #include "tendril/env/mesh_import.h"
 #include "tendril/scene/scene.h"
+#include "tendril/session/edit.h"
 #include "tendril/session/session.h"
 
 #include <fmt/format.h>
@@ -256,6 +257,59 @@ TEST(ClimbGrowth, SeedInsideAnObstacleIsAnError) {
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()), "test scene:/plants/0/position: seed position (0, 0, 0) lies inside an obstacle");
   }
+}
+
+}  // namespace
+}  // namespace tendril
+
+namespace tendril {
+namespace {
+
+// The node of `plant` whose subtree (itself and everything beyond it) has between lo and hi
+// nodes, the first in node order; -1 if none has.
+int32_t subtreeOfSize(const plant::PlantModel& plant, size_t lo, size_t hi) {
+  std::vector<size_t> size(plant.nodeCount(), 1);
+  for (size_t i = plant.nodeCount(); i-- > 0;)
+    if (plant.parent[i] >= 0) size[size_t(plant.parent[i])] += size[i];
+  for (size_t i = 1; i < size.size(); ++i)
+    if (size[i] >= lo && size[i] <= hi) return int32_t(i);
+  return -1;
+}
+
+// max_segments stops a climbing plant with its tips kept; a cut that leaves it room for a
+// twentieth of the cap again (pruning) lets it grow on, a cut of a few segments does not (a plant
+// would start and stop, and warn, over and over). The particle model does the same
+// (ParticleGrowth.ACappedPlantGrowsOnWhenPrunedOrItsCapIsRaised).
+TEST(ClimbGrowth, ACappedPlantGrowsOnWhenPruned) {
+  auto s = grow(std::string(R"({"tendril": 1, "seed": 3, "environment": {"obstacles": [)") + kGround +
+                    R"(, {"name": "wall", "type": "wall", "size": [3, 2.5, 0.2]}], "lights": [)" + kSun +
+                    R"(]}, "plants": [{"name": "ivy", "position": [0, 0, 0.15],
+                        "species": {"base": "japanese-ivy", "max_segments": 400}}]})",
+                200);
+  session::Editor editor(*s);
+  const size_t capped = s->plants()[0].nodeCount();
+  ASSERT_GE(capped, 400u) << "the plant reaches its cap";
+  editor.step(30);
+  EXPECT_EQ(s->plants()[0].nodeCount(), capped) << "and stops there";
+  EXPECT_TRUE(s->finished());
+
+  const int32_t twig = subtreeOfSize(s->plants()[0], 2, 6);
+  ASSERT_GE(twig, 0);
+  editor.apply(session::Cut{.plant = 0, .node = uint32_t(twig), .remove = true});
+  const size_t trimmed = s->plants()[0].nodeCount();
+  editor.step(50);
+  EXPECT_EQ(s->plants()[0].nodeCount(), trimmed) << "a plant trimmed by " << capped - trimmed << " segments stays stopped";
+
+  const int32_t branch = subtreeOfSize(s->plants()[0], 100, 250);
+  ASSERT_GE(branch, 0);
+  editor.apply(session::Cut{.plant = 0, .node = uint32_t(branch), .remove = true});
+  const size_t pruned = s->plants()[0].nodeCount();
+  editor.step(100);
+  const size_t regrown = s->plants()[0].nodeCount();
+  std::printf("climbing ivy capped at %zu segments; trimmed to %zu: stays; pruned to %zu: %zu 100 steps later\n", capped,
+              trimmed, pruned, regrown);
+  EXPECT_GT(regrown, pruned + (trimmed - pruned) / 2) << "the pruned plant grows back";
+  expectClean(*s);
 }
 
 }  // namespace

@@ -476,8 +476,10 @@ void ClimbSystem::step(const env::Environment& env) {
   // Gather every live tip of every plant; grow them in parallel into their own outcomes.
   refs_.clear();
   firstOutcome_.clear();
+  resumeCappedPlants();
   for (const auto& p : plants_) {
     firstOutcome_.push_back(static_cast<uint32_t>(refs_.size()));
+    if (p->capped) continue;  // its tips wait for room
     for (uint32_t i = 0; i < p->tips.size(); ++i) refs_.push_back({p->id, i});
   }
   firstOutcome_.push_back(static_cast<uint32_t>(refs_.size()));
@@ -496,20 +498,39 @@ void ClimbSystem::step(const env::Environment& env) {
         for (const Outcome& o : outcomes_)
           if (o.addNode) occupancy_.insert(o.end);
       },
-      [&] { parallelFor(0, plants_.size(), [&](size_t i) { mergePlant(*plants_[i], firstOutcome_[i]); }, 1); });
+      [&] {
+        parallelFor(0, plants_.size(), [&](size_t i) {
+          if (!plants_[i]->capped) mergePlant(*plants_[i], firstOutcome_[i]);
+        }, 1);
+      });
   for (auto& pp : plants_) {
     Plant& p = *pp;
     if (!p.capped && p.model.nodeCount() >= size_t(p.def.species.maxSegments)) {
       p.capped = true;
+      // The tips wait (resumeCappedPlants); their nodes say why they stopped meanwhile.
       for (const Tip& t : p.tips)
         if (t.lastNode >= 0) p.model.flags[t.lastNode] = plant::deadEnd(p.model.flags[t.lastNode], plant::TipEnd::Capped);
-      p.tips.clear();
       log::warn("plant \"{}\" reached max_segments ({}): growth stopped; raise the species' max_segments to grow "
                 "further",
                 p.def.name, p.def.species.maxSegments);
     }
   }
   ++step_;
+}
+
+void ClimbSystem::resumeCappedPlants() {
+  // A plant stopped at max_segments grows on from the tips it had once a cut has left it room for
+  // a twentieth of the cap again (not at every segment cut off: a plant pruned a little would
+  // start and stop, and warn, over and over).
+  for (auto& pp : plants_) {
+    Plant& p = *pp;
+    if (!p.capped) continue;
+    const size_t cap = size_t(std::max(p.def.species.maxSegments, 1));
+    if (p.model.nodeCount() + std::max<size_t>(cap / 20, 1) > cap) continue;
+    p.capped = false;
+    for (const Tip& t : p.tips)
+      if (t.lastNode >= 0) p.model.flags[t.lastNode] &= ~(plant::kNodeDead | plant::kNodeTipEndMask);
+  }
 }
 
 void ClimbSystem::mergePlant(Plant& p, size_t k) {
@@ -574,7 +595,7 @@ models::GrowthGauge::Reading ClimbSystem::growthReading(uint32_t plant) const {
   const Plant& p = *plants_.at(plant);
   const ClimbSpecies& s = p.def.species;
   models::GrowthGauge::Reading r;
-  r.growing = !p.tips.empty();
+  r.growing = !p.capped && !p.tips.empty();
   for (float l : p.model.length) r.grown += double(l);
   // Its first segment grew in the step it was seeded in (a seed whose tip died at once has
   // none: counted from the start).
@@ -597,7 +618,7 @@ double ClimbSystem::unhinderedGrowth(uint32_t plant, uint32_t steps) const {
 
 bool ClimbSystem::finished() const {
   for (const auto& p : plants_)
-    if (!p->tips.empty()) return false;
+    if (!p->capped && !p->tips.empty()) return false;
   return true;
 }
 
@@ -605,8 +626,9 @@ plant::PlantModel ClimbSystem::snapshot(uint32_t id) const {
   const Plant& p = *plants_.at(id);
   plant::PlantModel m = p.model;
   for (size_t i = 0; i < m.nodeCount(); ++i) m.age[i] = float(step_ - p.birthStep[i]) * stepTime_;
-  for (const Tip& t : p.tips)
-    if (t.lastNode >= 0) m.flags[t.lastNode] |= plant::kNodeApex;
+  if (!p.capped)
+    for (const Tip& t : p.tips)
+      if (t.lastNode >= 0) m.flags[t.lastNode] |= plant::kNodeApex;
   if (p.def.species.pipeModel) {
     // Pipe model (Shinozaki et al. 1964; seed 003's future work): a segment carries the
     // cross-sections of everything above it, r_parent² >= Σ r_child². Children come after
@@ -626,7 +648,7 @@ ClimbStats ClimbSystem::stats(uint32_t id) const {
   ClimbStats s;
   s.segments = p.model.nodeCount();
   s.leaves = p.model.leafCount();
-  s.aliveTips = p.tips.size();
+  s.aliveTips = p.capped ? 0 : p.tips.size();
   for (uint32_t f : p.model.flags)
     if (f & plant::kNodeClimbing) ++s.climbingSegments;
   return s;

@@ -77,6 +77,8 @@ class ClimbSystem {
   // Removes node `node` of the plant, everything beyond it, their leaves and their tips
   // (interactive cuts); the parent becomes a dead end if nothing else grows from it.
   // Throws Error for a node out of range.
+  // A plant that reached max_segments keeps its tips; a cut that leaves it room for a twentieth
+  // of the cap again lets them grow on.
   void cut(uint32_t plant, uint32_t node);
 
   // Every field that decides future steps (sessions, undo). loadState expects the same plants,
@@ -139,6 +141,7 @@ class ClimbSystem {
                    Outcome& out) const;
   // Applies the plant's outcomes, which start at outcomes_[first]: new nodes, leaves and tips.
   void mergePlant(Plant& plant, size_t first);
+  void resumeCappedPlants();
   void rebuildOccupancy();
 
   uint64_t sceneSeed_;
