@@ -33,7 +33,11 @@ RTCDevice environmentDevice() {
     // other last bits (a closest point, a hit distance), which growth then amplifies. Asking for the
     // AVX2 kernels wherever the CPU has them gives the same plants on every such machine (an AVX-512
     // one included); elsewhere Embree chooses, and results are the same only among like CPUs.
+#if defined(__x86_64__) && defined(__GNUC__)
     static const bool hasAvx2 = __builtin_cpu_supports("avx2");
+#else
+    static const bool hasAvx2 = false;
+#endif
     RTCDevice d = rtcNewDevice(hasAvx2 ? "isa=avx2" : nullptr);
     if (!d) throw Error("Embree", "", "cannot create the ray tracing device");
     rtcSetDeviceErrorFunction(
