@@ -1,6 +1,8 @@
 // Growth-Flow growth in the growth models: a plant grown in a wind above w_max against the same
 // seed in still air (seed 001 §3.1.2, §3.2.2), and a wind below w_min changing nothing.
+#include "support/particle_session.h"
 #include "support/test_paths.h"
+#include "tendril/session/edit.h"
 #include "tendril/scene/scene.h"
 #include "tendril/session/session.h"
 
@@ -324,6 +326,39 @@ TEST(GrowthFlowParticles, WindAboveMaxGivesShorterThickerSmallerLeavedPlantsTurn
   const double calmAngle = std::acos(meanDirection(calm, gc).x()), windAngle = std::acos(meanDirection(windy, gw).x());
   EXPECT_LT(windAngle, calmAngle - 0.2) << "angle to the wind: " << windAngle << " rad in wind, " << calmAngle
                                          << " rad in still air";
+}
+
+// A live species edit (the studio's sliders, `set_species`) that sets a key to the value it has
+// changes nothing, in still air and in a wind that shortens the internodes and shrinks the leaves:
+// growing particles keep the target lengths their growth gave them (a leaf particle its blade's),
+// and only a changed particle_length or leaf size rescales them.
+TEST(GrowthFlowParticles, ALiveSpeciesEditThatChangesNothingChangesNothing) {
+  for (const char* wind : {R"({"velocity": [0, 0, 0]})", R"({"velocity": [20, 0, 0]})"}) {
+    SCOPED_TRACE(wind);
+    std::string json = std::string(R"({"tendril": 1, "seed": 4, "environment": {"obstacles": [
+        {"name": "ground", "type": "plane", "size": [20, 20]},
+        {"name": "wall", "type": "wall", "size": [8, 4, 0.2]}],
+      "lights": [{"type": "directional", "direction": [0, -1, -0.4]}],
+      "wind": )") + wind + R"(},
+    "plants": [{"name": "ivy", "model": "particles", "position": [0, 0.05, 0.13], "seed": 3,
+                "species": {"base": "ivy-particles", "max_particles": 1500, "branch_probability": 0.3}}]})";
+    auto open = [&] {  // with the scene's JSON, which a species edit rewrites
+      const Json doc = parseJson(json, "test scene");
+      return std::make_unique<session::Session>(scene::parseScene(doc, "test scene", test::sourceDir()), doc,
+                                                test::sourceDir());
+    };
+    auto edited = open(), plain = open();
+    session::Editor editor(*edited);
+    editor.step(300);
+    const float phototropism = test::particleWorld(*edited)->species(0).phototropism;
+    editor.apply(session::SetSpecies{.plant = 0, .keys = Json{{"phototropism", phototropism}}});
+    editor.step(300);
+    plain->run(600);
+    const std::vector<plant::PlantModel> a = edited->plants(), b = plain->plants();
+    ASSERT_GT(b[0].nodeCount(), 300u);
+    EXPECT_EQ(plant::contentHash(a), plant::contentHash(b))
+        << a[0].nodeCount() << " nodes after the edit, " << b[0].nodeCount() << " without it";
+  }
 }
 
 TEST(GrowthFlowParticles, WindBelowMinChangesNothing) {

@@ -171,10 +171,18 @@ uint32_t ParticleWorld::addPlant(const std::string& name, const ParticleSpecies&
 }
 
 void ParticleWorld::setSpecies(uint32_t plant, const ParticleSpecies& species) {
-  plants_.at(plant).species = species;
+  // Every particle keeps the target length its growth gave it — Growth-Flow's shorter internodes
+  // and smaller leaves in wind, a leaf particle's blade length — and follows a changed
+  // particle_length or leaf size in proportion. (Setting every target to the species' still-air
+  // particle length made any live edit, even of an unrelated key, undo the wind's effect on the
+  // growing particles and give leaf particles a stem's length.)
+  Plant& pl = plants_.at(plant);
+  const float stemScale = species.particleLength / std::max(pl.species.particleLength, 1e-6f);
+  const float leafScale = pl.species.leafSize > 0.0f ? species.leafSize / pl.species.leafSize : 1.0f;
+  pl.species = species;
   for (uint32_t i = 0; i < capacity(); ++i)
     if ((flags_[i] & kActive) && plant_[i] == plant) {
-      targetHalfLength_[i] = 0.5f * species.particleLength;
+      targetHalfLength_[i] *= (flags_[i] & kLeaf) ? leafScale : stemScale;
       updateMass(i);
     }
 }
