@@ -225,17 +225,24 @@ TEST(GrowthFlowClimb, GustsDroppingBelowWindMinDoNotMakeShootsZigZag) {
                                       << " rad, still air " << c << " rad";
 }
 
-std::vector<plant::PlantModel> growParticles(const std::string& wind, int steps) {
-  // An ivy of oriented particles on a wide wall, the wind blowing along the wall (+X).
-  std::string json = std::string(R"({"tendril": 1, "seed": 4, "steps": )") + std::to_string(steps) +
-                     R"(, "environment": {"obstacles": [
+// An ivy of oriented particles on a wide wall in `wind` (a scene's "wind" object), the scene
+// file as JSON.
+Json particleIvySceneJson(const std::string& wind) {
+  return parseJson(std::string(R"({"tendril": 1, "seed": 4, "environment": {"obstacles": [
         {"name": "ground", "type": "plane", "size": [20, 20]},
         {"name": "wall", "type": "wall", "size": [8, 4, 0.2]}],
       "lights": [{"type": "directional", "direction": [0, -1, -0.4]}],
-      "wind": )" + wind + R"(},
+      "wind": )") + wind + R"(},
     "plants": [{"name": "ivy", "model": "particles", "position": [0, 0.05, 0.13], "seed": 3,
-                "species": {"base": "ivy-particles", "max_particles": 1500, "branch_probability": 0.3}}]})";
-  scene::Scene s = scene::parseScene(parseJson(json, "test scene"), "test scene", test::sourceDir());
+                "species": {"base": "ivy-particles", "max_particles": 1500, "branch_probability": 0.3}}]})",
+                   "test scene");
+}
+
+std::vector<plant::PlantModel> growParticles(const std::string& wind, int steps) {
+  // The wind blowing along the wall (+X).
+  Json doc = particleIvySceneJson(wind);
+  doc["steps"] = steps;
+  scene::Scene s = scene::parseScene(doc, "test scene", test::sourceDir());
   session::Session session(std::move(s));
   session.run(uint32_t(steps));
   return session.plants();
@@ -335,15 +342,8 @@ TEST(GrowthFlowParticles, WindAboveMaxGivesShorterThickerSmallerLeavedPlantsTurn
 TEST(GrowthFlowParticles, ALiveSpeciesEditThatChangesNothingChangesNothing) {
   for (const char* wind : {R"({"velocity": [0, 0, 0]})", R"({"velocity": [20, 0, 0]})"}) {
     SCOPED_TRACE(wind);
-    std::string json = std::string(R"({"tendril": 1, "seed": 4, "environment": {"obstacles": [
-        {"name": "ground", "type": "plane", "size": [20, 20]},
-        {"name": "wall", "type": "wall", "size": [8, 4, 0.2]}],
-      "lights": [{"type": "directional", "direction": [0, -1, -0.4]}],
-      "wind": )") + wind + R"(},
-    "plants": [{"name": "ivy", "model": "particles", "position": [0, 0.05, 0.13], "seed": 3,
-                "species": {"base": "ivy-particles", "max_particles": 1500, "branch_probability": 0.3}}]})";
     auto open = [&] {  // with the scene's JSON, which a species edit rewrites
-      const Json doc = parseJson(json, "test scene");
+      const Json doc = particleIvySceneJson(wind);
       return std::make_unique<session::Session>(scene::parseScene(doc, "test scene", test::sourceDir()), doc,
                                                 test::sourceDir());
     };
