@@ -318,14 +318,18 @@ size_t keepStemsOutside(plant::PlantModel& p, const env::Environment& env, int s
       const Vec3 before = q >= 0 && next[size_t(q)] == int32_t(i) ? at(startPoint[size_t(q)]) : Vec3(2.0f * a - b);
       const Vec3 after = c >= 0 ? at(spanEnd[size_t(c)]) : Vec3(2.0f * b - a);
       const CurveSegment curve = centripetalCatmullRom(before, a, b, after);
-      const float r = c >= 0 ? std::max(p.radius[i], p.radius[size_t(c)]) : p.radius[i];
-      const float need = barkClearance(r, margin);
+      // The mesh sweeps the radius from this node's to the next one's along the span
+      // (mesh/branch_sweep.cpp); the control points' hull is tried at the larger of the two.
+      const float r0 = p.radius[i], r1 = c >= 0 ? p.radius[size_t(c)] : r0;
+      const float need = barkClearance(std::max(r0, r1), margin);
       const Vec3 control[4] = {curve.p1, curve.p1 + curve.m1 / 3.0f, curve.p2 - curve.m2 / 3.0f, curve.p2};
       if (provenClear(boxes, control, 4, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) return;
       for (float s : ringAt) {
         if (s == 0.0f && planted[startPoint[i]]) continue;  // a planted base stays as it stands
         const Vec3 onCurve = curve.point(s);
-        if (provenClear(boxes, &onCurve, 1, {&plane[startPoint[i]], &plane[spanEnd[i]]}, need)) continue;
+        const float r = s == 1.0f ? r1 : r0 + (r1 - r0) * s;  // the ring's radius, as the mesh sweeps it
+        if (provenClear(boxes, &onCurve, 1, {&plane[startPoint[i]], &plane[spanEnd[i]]}, barkClearance(r, margin)))
+          continue;
         const Vec3 d = curve.derivative(s);
         const float dn = d.norm();
         const Ring ring{r, dn > 1e-6f * len ? Vec3(d / dn) : Vec3(chord / len)};
