@@ -138,6 +138,14 @@ struct ParticleWorld::ApexUpdate {
   bool leafOnSupport = false;  // leafUp is a support's normal: blades lie on it
 };
 
+size_t ParticleWorld::particlesPerGrowth(const Plant& pl) const {
+  // The successor, up to B lateral buds, and a leaf where leaves are particles of their own.
+  const ParticleSpecies& s = pl.species;
+  const bool leafParticle = s.leafStep > 0 && s.leafSize > 0.0f && !s.leafShapes.empty() &&
+                            pl.particles < size_t(std::max(s.leafParticleLimit, 0));
+  return 1 + size_t(std::max(s.maxLateralBuds, 0)) + (leafParticle ? 1 : 0);
+}
+
 void ParticleWorld::resumeCappedPlants() {
   // A plant stopped at max_particles grows on once it has room again: pruning (a cut that
   // removes), pieces that broke off and were removed at rest, or a raised max_particles. Not at
@@ -147,7 +155,7 @@ void ParticleWorld::resumeCappedPlants() {
     Plant& pl = plants_[p];
     if (!pl.capped) continue;
     const ParticleSpecies& s = pl.species;
-    const size_t room = size_t(std::max(s.maxParticles / 20, 1)) + 1 + size_t(std::max(s.maxLateralBuds, 0));
+    const size_t room = size_t(std::max(s.maxParticles / 20, 1)) + particlesPerGrowth(pl);
     if (pl.particles + room > size_t(std::max(s.maxParticles, 0))) continue;
     pl.capped = false;
     // The tips that stopped for the cap grow on; the apices that waited for it resume by themselves.
@@ -301,7 +309,7 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
   if (!u.grown) return;
 
   flags_[i] = (flags_[i] & ~kApex) | kGrown;
-  if (pl.particles + 1 + s.maxLateralBuds > size_t(s.maxParticles)) {
+  if (pl.particles + particlesPerGrowth(pl) > size_t(std::max(s.maxParticles, 0))) {
     if (!pl.capped)
       log::warn("plant \"{}\" reached max_particles ({}): growth stopped; raise the species' max_particles to "
                 "grow further",

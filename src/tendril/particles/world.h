@@ -230,6 +230,8 @@ class ParticleWorld final : public models::AirCoupling {
   void grow(const env::Environment& env);
   // A plant stopped at its particle cap grows on once it has room again (see grow()).
   void resumeCappedPlants();
+  // The most particles one growth of an apex adds to its plant (max_particles is kept with it).
+  size_t particlesPerGrowth(const Plant& pl) const;
   struct ApexUpdate;  // what an apex decided (growth.cpp)
   void decideApex(uint32_t i, const env::Environment& env, ApexUpdate& u) const;
   void applyApex(uint32_t i, const ApexUpdate& u, const env::Environment& env);
