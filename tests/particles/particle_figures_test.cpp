@@ -706,7 +706,9 @@ TEST(ParticleFigures, Fig7sEditScriptSeedsBranchesDragsBlowsAndCuts) {
   EXPECT_LT(f.toFirstTarget[1], 0.6f * f.toFirstTarget[0]);
   EXPECT_LT(f.toSecondTarget[1], 0.85f * f.toSecondTarget[0]);
   // (d) the fan's air moves the plant, downwind on the whole
-  EXPECT_GT(moved, 0.01) << "the fan moves the plant";
+  // How far depends on how firmly the anchors hold the stems it blows on (9.1 mm since they hold
+  // thickened stems at their clearance, 13–17 mm before); without the fan it is 0.
+  EXPECT_GT(moved, 0.005) << "the fan moves the plant";
   EXPECT_GT(downwind, 0.8 * moved) << "downwind";
   // (e) the cut takes off the seeded branch: its particles leave the plant and fall
   EXPECT_EQ(f.cutParticle, f.branch) << "the script cuts the seeded branch";
@@ -914,6 +916,38 @@ TEST(ParticleFigures, Fig6sDraggedShootBreaksWherePulledPastTheThresholdAndFalls
   EXPECT_TRUE(gentle.breaks.empty());
   EXPECT_LT(gentle.largestIntact, breaking);
   EXPECT_EQ(gentle.detachedBeforeDrag + unbreakable.detachedBeforeDrag, 0u);
+}
+
+// Undisturbed for a minute at t_s 0.3 on a wall it does not outgrow (8 m: it climbs to the top
+// in that minute), the ivy loses nothing. Secondary growth thickens its foot to centimetres; the
+// anchors hold those stems at their bark's clearance off the wall, where the collisions keep
+// them. (While an anchor stayed where the thin particle first lay, the two pulled against each
+// other every step, strain crept up at the foot, and this plant lost 8,038 particles at step
+// 1,283.) Shoots that grow out into open air over a wall's top or edge can still whip and
+// break: docs/particles.md, "Known limits".
+TEST(ParticleFigures, Fig6sIvyHoldsOnWholeForAMinuteAtTheThreshold) {
+  const std::filesystem::path path = scenePath("particles-fig06-break.json");
+  Json doc = readJsonFile(path);
+  ASSERT_EQ(doc["plants"][0]["species"]["break_threshold"].get<double>(), 0.3);
+  doc["environment"]["obstacles"][1]["size"][1] = 8.0;
+  doc["environment"]["obstacles"][1]["position"][1] = 4.0;
+  doc["plants"][0]["seed"] = 1;
+  session::Session s(scene::parseScene(doc, path.string(), path.parent_path()));
+  const ParticleWorld& w = *test::particleWorld(s);
+  int firstDetached = -1;
+  for (int step = 0; step < 2400 && firstDetached < 0; ++step) {  // 60 s
+    s.step();
+    for (uint32_t i = 0; i < w.capacity() && firstDetached < 0; ++i)
+      if (w.active(i) && (w.flags(i) & kDetached)) firstDetached = step;
+  }
+  float top = 0.0f;
+  for (uint32_t i = 0; i < w.capacity(); ++i)
+    if (isStem(w, i, 0)) top = std::max(top, w.position(i).y());
+  std::printf("Fig. 6, a minute undisturbed on an 8 m wall: %zu particles, top stem at %.2f m, first piece off at step %d\n",
+              w.particleCount(), top, firstDetached);
+  EXPECT_EQ(firstDetached, -1) << "nothing breaks off an undisturbed plant";
+  EXPECT_GT(top, 6.0f) << "it climbs the wall";
+  EXPECT_GT(w.particleCount(), 20000u);
 }
 
 }  // namespace

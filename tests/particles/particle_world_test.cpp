@@ -505,10 +505,10 @@ TEST(ParticleDynamics, SameSeedSameSnapshotForAnyThreadCount) {
 TEST(ParticleDynamics, Avx2AndBaselineShapeMatchingGiveTheSameBits) {
   if (!avx2ShapeMatching()) GTEST_SKIP() << "this CPU runs only the baseline passes";
   auto env = makeEnv(kGroundAndWall);
-  const uint64_t avx2 = twoDraggedIvies(*env, 1, 1200, 300);
+  const uint64_t avx2 = twoDraggedIvies(*env, 2, 1200, 300);
   forceBaselineShapeMatching(true);
   EXPECT_FALSE(avx2ShapeMatching());
-  const uint64_t baseline = twoDraggedIvies(*env, 1, 1200, 300);
+  const uint64_t baseline = twoDraggedIvies(*env, 2, 1200, 300);
   forceBaselineShapeMatching(false);
   EXPECT_EQ(avx2, baseline);
 }
@@ -560,7 +560,8 @@ namespace {
 
 // Worlds saved before the Growth-Flow records carried their turn ("1TPW": four floats per
 // record) still load, and go on exactly as the world they were saved from when none of its
-// lineages grew in wind.
+// lineages grew in wind. So do worlds saved before the anchors kept the support under them
+// ("2TPW"): their anchors stay where they were set, in either.
 TEST(ParticleWorld, WorldsSavedBeforeTheWindTurnStillLoad) {
   auto env = makeEnv(kGroundAndWall);
   ParticleSpecies s = loadSpecies("ivy-particles", test::sourceDir());
@@ -583,9 +584,20 @@ TEST(ParticleWorld, WorldsSavedBeforeTheWindTurnStillLoad) {
     std::memcpy(&v, now.data() + at, 4);
     return v;
   };
-  ASSERT_EQ(u32At(0), 0x57505432u);
-  const float record[8] = {-1, 1, 1, 1, 0, 0, 0, 1};
+  ASSERT_EQ(u32At(0), 0x57505433u);
   const uint64_t n = w->capacity();
+  // As "2TPW": without the two arrays of the anchors' support at the end (count, element size,
+  // elements).
+  const size_t supportBytes = 2 * (8 + 4 + size_t(n) * sizeof(Vec3));
+  ASSERT_GT(now.size(), supportBytes);
+  now.resize(now.size() - supportBytes);
+  const uint32_t tag2 = 0x57505432u;
+  std::memcpy(now.data(), &tag2, 4);
+  auto reference = seeded();
+  ArchiveReader in2(now, "2TPW world");
+  reference->loadState(in2);
+  EXPECT_TRUE(in2.atEnd());
+  const float record[8] = {-1, 1, 1, 1, 0, 0, 0, 1};
   size_t found = 0;
   for (size_t at = 4; at + 12 + n * 32 <= now.size(); ++at) {
     uint64_t count;
@@ -613,10 +625,10 @@ TEST(ParticleWorld, WorldsSavedBeforeTheWindTurnStillLoad) {
   loaded->loadState(in);
   EXPECT_TRUE(in.atEnd());
   for (int k = 0; k < 50; ++k) {
-    w->step(*env);
+    reference->step(*env);
     loaded->step(*env);
   }
-  std::vector<plant::PlantModel> a = w->snapshots(), b = loaded->snapshots();
+  std::vector<plant::PlantModel> a = reference->snapshots(), b = loaded->snapshots();
   ASSERT_EQ(a.size(), 1u);
   ASSERT_EQ(b.size(), 1u);
   EXPECT_EQ(plant::contentHash(a[0]), plant::contentHash(b[0]));

@@ -38,7 +38,7 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
   // over obstacles it stays so): a point δ from a sampled one lies at least d − √3 δ from any
   // obstacle. A particle whose three samples cannot reach its radius this way would get no push
   // from sampling, so it is not sampled; the margin covers rounding.
-  constexpr float kLipschitz = 1.7321f, kMargin = 1e-4f, kContactSlack = 1e-5f;
+  constexpr float kLipschitz = 1.7321f, kMargin = 1e-4f;
   constexpr float kUnknown = -std::numeric_limits<float>::infinity();
 
   // The particle is a capsule along its long axis: test its centre and both ends against the
@@ -50,10 +50,9 @@ void ParticleWorld::collideObstacles(const env::Environment& env) {
     // steps, where no distance sample sees it: their path is cast as a ray first.
     const Vec3 move = xp_[i] - x_[i];
     const float moved = move.norm();
-    // The capsule keeps its bark's clearance (models::barkClearance, and a little more for
-    // rounding) off obstacles, so the bark the mesh sweeps round it stays outside them without
-    // the stand-off pass moving it.
-    const float contact = models::barkClearance(b_[i]) + kContactSlack;
+    // The capsule keeps its bark's clearance off obstacles (contactDistance), so the bark the
+    // mesh sweeps round it stays outside them without the stand-off pass moving it.
+    const float contact = contactDistance(uint32_t(i));
     if (moved > b_[i] && std::isfinite(moved)) {
       if (auto hit = env.rayCast(x_[i], move / moved, moved + contact)) {
         Vec3 n = hit->normal;

@@ -133,7 +133,7 @@ struct ParticleWorld::ApexUpdate {
   bool anchor = false;
   bool dormant = false;  // the apex stops growing (crowded, or in a region painted to repel growth)
   plant::TipEnd stop = plant::TipEnd::Crowded;  // why, when dormant
-  Vec3 anchorPoint = Vec3::Zero();
+  Vec3 anchorSupport = Vec3::Zero(), anchorNormal = Vec3::Zero();  // the support point under the particle, its normal
   Vec3 leafUp = Vec3::Zero();  // preferred leaf normal here (away from the surface / to the light)
   bool leafOnSupport = false;  // leafUp is a support's normal: blades lie on it
 };
@@ -246,7 +246,8 @@ void ParticleWorld::decideApex(uint32_t i, const env::Environment& env, ApexUpda
     u.leafOnSupport = true;
     if (sp->distance <= touch) {
       u.anchor = true;
-      u.anchorPoint = sp->point + sp->away * b_[i];
+      u.anchorSupport = sp->point;
+      u.anchorNormal = sp->away;
     }
   }
   vf = (rg * forward).normalized();
@@ -304,7 +305,9 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
   updateMass(i);
   if (u.anchor && !(flags_[i] & kAnchored)) {
     flags_[i] |= kAnchored;
-    anchor_[i] = u.anchorPoint;
+    anchorSupport_[i] = u.anchorSupport;
+    anchorNormal_[i] = u.anchorNormal;
+    anchor_[i] = u.anchorSupport + u.anchorNormal * contactDistance(i);
   }
   if (!u.grown) return;
 

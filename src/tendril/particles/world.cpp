@@ -6,6 +6,7 @@
 #include "tendril/core/parallel_largest_first.h"
 #include "tendril/core/timer.h"
 #include "tendril/env/seed_check.h"
+#include "tendril/models/stand_off.h"
 
 #include <fmt/format.h>
 
@@ -33,10 +34,11 @@ uint32_t ParticleWorld::allocate() {
     a_.resize(n), b_.resize(n), m_.resize(n), age_.resize(n);
     flags_.resize(n), plant_.resize(n), parent_.resize(n), firstChild_.resize(n), nextSibling_.resize(n);
     targetHalfLength_.resize(n), restTime_.resize(n), anchor_.resize(n), anchorPhi_.resize(n);
+    anchorSupport_.resize(n), anchorNormal_.resize(n);
     branchIndex_.resize(n), order_.resize(n), leafShape_.resize(n), leafTarget_.resize(n);
     flow_.resize(n);
   }
-  x_[i] = xp_[i] = v_[i] = w_[i] = xr_[i] = anchor_[i] = Vec3::Zero();
+  x_[i] = xp_[i] = v_[i] = w_[i] = xr_[i] = anchor_[i] = anchorSupport_[i] = anchorNormal_[i] = Vec3::Zero();
   q_[i] = qp_[i] = qr_[i] = groupRotation_[i] = Quat::Identity();
   a_[i] = b_[i] = m_[i] = age_[i] = targetHalfLength_[i] = restTime_[i] = anchorPhi_[i] = leafTarget_[i] = 0.0f;
   flags_[i] = kActive;
@@ -106,6 +108,8 @@ void ParticleWorld::updateMass(uint32_t i) {
   const float density = plants_[plant_[i]].species.density;
   m_[i] = std::max(1e-9f, 4.0f / 3.0f * kPi * std::max(a_[i], 1e-4f) * b_[i] * b_[i] * density);
 }
+
+float ParticleWorld::contactDistance(uint32_t i) const { return models::barkClearance(b_[i]) + 1e-5f; }
 
 float ParticleWorld::stiffnessOf(uint32_t i) const {
   // §4.3: s = t_l / t_m clamped to [0, 1], starting from `stiffnessStart` at birth (the paper
@@ -289,6 +293,12 @@ size_t ParticleWorld::carryWithObstacle(const env::Environment& env, uint32_t ob
     v_[i] = turn * v_[i];
     w_[i] = turn * w_[i];
   };
+  // An anchor on the moved obstacle: its point, the support under it and the normal there.
+  auto carryAnchor = [&](uint32_t i) {
+    anchor_[i] = motion.applyPoint(anchor_[i]);
+    anchorSupport_[i] = motion.applyPoint(anchorSupport_[i]);
+    anchorNormal_[i] = turn * anchorNormal_[i];
+  };
   // Plants seeded on the obstacle: every particle of theirs, rest shape and anchors too.
   std::vector<uint8_t> whole(plants_.size(), 0);
   for (uint32_t p = 0; p < plants_.size(); ++p) {
@@ -305,13 +315,13 @@ size_t ParticleWorld::carryWithObstacle(const env::Environment& env, uint32_t ob
       qr_[i] = (turn * qr_[i]).normalized();
       // An anchor on another surface lets go: the plant has left it.
       if (flags_[i] & kAnchored) {
-        if (anchoredHere) anchor_[i] = motion.applyPoint(anchor_[i]);
+        if (anchoredHere) carryAnchor(uint32_t(i));
         else flags_[i] &= ~kAnchored;
       }
       moved[i] = 1;
     } else if (anchoredHere) {
       carry(uint32_t(i));
-      anchor_[i] = motion.applyPoint(anchor_[i]);
+      carryAnchor(uint32_t(i));
       moved[i] = 1;
     }
   }, 256);

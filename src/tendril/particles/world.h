@@ -271,9 +271,18 @@ class ParticleWorld final : public models::AirCoupling {
   std::vector<Quat> q_, qp_, qr_, groupRotation_;
   std::vector<float> a_, b_, m_, age_;
   std::vector<uint32_t> flags_, plant_, parent_, firstChild_, nextSibling_;
+  // How far a particle's centre keeps off obstacles: its bark's clearance
+  // (models::barkClearance) and a little more for rounding. Collisions push to it; anchors hold
+  // at it.
+  float contactDistance(uint32_t i) const;
   // Cold(er) per-particle state.
   std::vector<float> targetHalfLength_, restTime_;
-  std::vector<Vec3> anchor_;
+  // Eq. 5's anchor: the point the particle's centre is pulled to (anchor_), set each step at its
+  // bark's clearance (contactDistance) off the support point under it (anchorSupport_) along
+  // the support's outward normal there (anchorNormal_), so that an anchored particle that
+  // thickens is held where collisions keep it, not pulled into its support. A zero normal
+  // keeps anchor_ where it was set (worlds saved before the support was kept).
+  std::vector<Vec3> anchor_, anchorSupport_, anchorNormal_;
   std::vector<float> anchorPhi_;
   std::vector<uint32_t> branchIndex_;  // position along its branch (leaf step, phyllotaxis)
   std::vector<uint16_t> order_;        // branch order

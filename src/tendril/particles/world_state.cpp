@@ -13,8 +13,9 @@ namespace tendril::particles {
 
 namespace {
 
-constexpr uint32_t kWorldTag = 0x57505432;        // "2TPW"
-constexpr uint32_t kWorldTagBefore = 0x57505431;  // "1TPW": Growth-Flow records without their turn
+constexpr uint32_t kWorldTag = 0x57505433;          // "3TPW"
+constexpr uint32_t kWorldTagNoSupport = 0x57505432;  // "2TPW": anchors without the support under them
+constexpr uint32_t kWorldTagBefore = 0x57505431;     // "1TPW": and Growth-Flow records without their turn
 
 }  // namespace
 
@@ -24,7 +25,9 @@ constexpr uint32_t kWorldTagBefore = 0x57505431;  // "1TPW": Growth-Flow records
 // rewritten before it is read (hashFill_, hashPacked_, hashContact_, nextRadius_). The caches
 // are written too (it is cheaper than proving that rebuilding them gives the same bits); only the
 // obstacle-clearance proof is dropped on load (clearanceEnv_), which is exact: it only skips
-// distance samples that could not push a particle (collideObstacles()).
+// distance samples that could not push a particle (collideObstacles()). The support under each
+// anchor (anchorSupport_, anchorNormal_) follows this list in the archive, so that worlds saved
+// before it was kept still load.
 template <class Self, class Visit>
 void ParticleWorld::visitState(Self& w, Visit&& v) {
   v(w.settings_);
@@ -105,12 +108,14 @@ void ParticleWorld::saveState(ArchiveWriter& out) const {
     out.boolean(p.capped);
   }
   visitState(*this, SaveField{out});
+  out.vector(anchorSupport_);
+  out.vector(anchorNormal_);
 }
 
 void ParticleWorld::loadState(ArchiveReader& in) {
   const size_t tagAt = in.position();
   const uint32_t tag = in.u32();
-  if (tag != kWorldTag && tag != kWorldTagBefore)
+  if (tag != kWorldTag && tag != kWorldTagNoSupport && tag != kWorldTagBefore)
     in.fail(tagAt, "expected the start of a particle world (the data is damaged)");
   const size_t at = in.position();
   const uint64_t n = in.u64();
@@ -124,13 +129,22 @@ void ParticleWorld::loadState(ArchiveReader& in) {
     p.capped = in.boolean();
   }
   visitState(*this, LoadField{in, tag == kWorldTagBefore});
+  if (tag == kWorldTag) {
+    in.vector(anchorSupport_);
+    in.vector(anchorNormal_);
+  } else {
+    // Anchors saved without their support stay where they were set (a zero normal).
+    anchorSupport_ = anchor_;
+    anchorNormal_.assign(anchor_.size(), Vec3::Zero());
+  }
   // Every per-particle array must have one slot per particle, and links must stay in range:
   // damaged input is an Error here, not a crash in the next step.
   const size_t cap = flags_.size();
   const size_t sizes[] = {x_.size(), xp_.size(), v_.size(), w_.size(), xr_.size(), q_.size(), qp_.size(),
                           qr_.size(), groupRotation_.size(), a_.size(), b_.size(), m_.size(), age_.size(),
                           plant_.size(), parent_.size(), firstChild_.size(), nextSibling_.size(),
-                          targetHalfLength_.size(), restTime_.size(), anchor_.size(), anchorPhi_.size(),
+                          targetHalfLength_.size(), restTime_.size(), anchor_.size(), anchorSupport_.size(),
+                          anchorNormal_.size(), anchorPhi_.size(),
                           branchIndex_.size(), order_.size(), leafShape_.size(), leafTarget_.size(), flow_.size()};
   for (size_t s : sizes)
     if (s != cap) in.fail("the particle arrays of the saved world differ in length");
