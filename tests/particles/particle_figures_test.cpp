@@ -745,6 +745,7 @@ struct Fig6 {
   std::vector<uint32_t> piece;  // particles that left the plant
   float pieceHeight[2] = {};     // the piece's mean height when the drag lets go, and when it rests
   float pieceTopAtRest = 0.0f;   // its highest particle then
+  size_t pieceBelow = 0;         // its particles then lower than 5 cm under the ground (flung off the scene)
   int restStep = -1;             // the step by which the piece rests (80 % of its particles)
   size_t anchoredBefore = 0, anchoredAfter = 0;  // the plant's other stem particles anchored before and after
   size_t stemsAtRelease = 0, stemsAfter = 0;     // the plant's stem particles as the drag lets go, at the end
@@ -859,6 +860,7 @@ Fig6 replayFig6(float breakThreshold, float maxOut) {
         f.restStep = int(k);
         f.pieceHeight[1] = meanHeight(w, left);
         for (uint32_t i : left) f.pieceTopAtRest = std::max(f.pieceTopAtRest, w.position(i).y());
+        for (uint32_t i : left) f.pieceBelow += w.position(i).y() < -0.05f;
       }
     }
   }
@@ -879,10 +881,10 @@ TEST(ParticleFigures, Fig6sDraggedShootBreaksWherePulledPastTheThresholdAndFalls
   auto report = [](const char* what, const Fig6& r) {
     std::printf("Fig. 6 %s: %zu particles, %zu detached before the drag; particle %u pulled from z %.3f to %.3f m; "
                 "%zu breaks, largest strain left whole %.3f; piece of %zu particles, mean height %.2f m at the release, "
-                "%.2f m (top %.2f m) at rest (step %d); others anchored %zu of %zu, moved %.4f m; %zu stems as the drag lets go, %zu at the end\n",
+                "%.2f m (top %.2f m, %zu below the ground) at rest (step %d); others anchored %zu of %zu, moved %.4f m; %zu stems as the drag lets go, %zu at the end\n",
                 what, r.particlesBeforeDrag, r.detachedBeforeDrag, r.dragged, r.draggedOut[0], r.draggedOut[1],
                 r.breaks.size(), r.largestIntact, r.piece.size(), r.pieceHeight[0], r.pieceHeight[1], r.pieceTopAtRest,
-                r.restStep, r.anchoredAfter, r.anchoredBefore, r.othersMoved, r.stemsAtRelease, r.stemsAfter);
+                r.pieceBelow, r.restStep, r.anchoredAfter, r.anchoredBefore, r.othersMoved, r.stemsAtRelease, r.stemsAfter);
     for (const Fig6::Break& b : r.breaks)
       std::printf("  break at step %u: %u from %u, strain %.3f, %s\n", b.step, b.child, b.parent, b.strain,
                   b.atPull ? "at the held particle or on its way to the root" : "elsewhere");
@@ -905,6 +907,9 @@ TEST(ParticleFigures, Fig6sDraggedShootBreaksWherePulledPastTheThresholdAndFalls
   EXPECT_GE(f.piece.size(), 20u);
   EXPECT_GE(f.restStep, 0) << "the piece comes to rest";
   EXPECT_LT(f.pieceHeight[1], 0.15f) << "on the ground";  // (a part of a large piece may lie on the wall's top)
+  // A large piece can fling a few of its particles off the scene as it falls (docs/particles.md,
+  // "Known limits"): 27 of 730 when this was written.
+  EXPECT_LE(10 * f.pieceBelow, f.piece.size()) << "the piece rests in the scene";
   // The rest of the plant stays anchored where it was, and grows on.
   EXPECT_GE(double(f.anchoredAfter), 0.98 * double(f.anchoredBefore));
   EXPECT_LT(f.othersMoved, 0.005);
