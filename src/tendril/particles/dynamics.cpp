@@ -96,7 +96,7 @@ void ParticleWorld::applyAnchors(const env::Environment& env) {
     // The anchor holds the particle at its bark's clearance off the support, as thick as the
     // particle is now (secondary growth thickens anchored stems to centimetres; an anchor kept
     // where it was set would pull them into the support against the collisions every step).
-    if (anchorNormal_[i] != Vec3::Zero()) anchor_[i] = anchorSupport_[i] + anchorNormal_[i] * contactDistance(uint32_t(i));
+    placeAnchor(uint32_t(i));
     if ((xp_[i] - anchor_[i]).norm() > s.anchorRelease) {
       flags_[i] &= ~kAnchored;
       anchorPhi_[i] = 0.0f;

@@ -307,7 +307,7 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
     flags_[i] |= kAnchored;
     anchorSupport_[i] = u.anchorSupport;
     anchorNormal_[i] = u.anchorNormal;
-    anchor_[i] = u.anchorSupport + u.anchorNormal * contactDistance(i);
+    placeAnchor(i);
   }
   if (!u.grown) return;
 

@@ -109,7 +109,14 @@ void ParticleWorld::updateMass(uint32_t i) {
   m_[i] = std::max(1e-9f, 4.0f / 3.0f * kPi * std::max(a_[i], 1e-4f) * b_[i] * b_[i] * density);
 }
 
-float ParticleWorld::contactDistance(uint32_t i) const { return models::barkClearance(b_[i]) + 1e-5f; }
+float ParticleWorld::contactDistance(uint32_t i) const {
+  constexpr float kRoundingSlack = 1e-5f;  // m, beyond the bark's clearance
+  return models::barkClearance(b_[i]) + kRoundingSlack;
+}
+
+void ParticleWorld::placeAnchor(uint32_t i) {
+  if (anchorNormal_[i] != Vec3::Zero()) anchor_[i] = anchorSupport_[i] + anchorNormal_[i] * contactDistance(i);
+}
 
 float ParticleWorld::stiffnessOf(uint32_t i) const {
   // §4.3: s = t_l / t_m clamped to [0, 1], starting from `stiffnessStart` at birth (the paper

@@ -275,6 +275,9 @@ class ParticleWorld final : public models::AirCoupling {
   // (models::barkClearance) and a little more for rounding. Collisions push to it; anchors hold
   // at it.
   float contactDistance(uint32_t i) const;
+  // Sets the anchor's point at the particle's contact distance off its support (anchor_ below);
+  // an anchor without a normal keeps its point.
+  void placeAnchor(uint32_t i);
   // Cold(er) per-particle state.
   std::vector<float> targetHalfLength_, restTime_;
   // Eq. 5's anchor: the point the particle's centre is pulled to (anchor_), set each step at its
