@@ -221,7 +221,13 @@ void ParticleWorld::decideApex(uint32_t i, const env::Environment& env, ApexUpda
   const float occluded = 1.0f - light.exposure * (1.0f - occlusion(x_[i], toLight));
   const float exposure = 1.0f - occluded;
   // Growth rate scales with the light the apex receives.
-  const float rate = s.growthRate * (s.minGrowthLight + (1.0f - s.minGrowthLight) * exposure);
+  float rate = s.growthRate * (s.minGrowthLight + (1.0f - s.minGrowthLight) * exposure);
+  // Growth-Flow's unit of growth time is one internode, here one particle (docs/wind.md): wind
+  // shortens what grows in a unit (eq. 8), not the unit. A particle of a lineage grown in wind
+  // elongates in proportion to its shortened length, so it takes as long as a still-air one;
+  // at the still-air speed, short particles came faster, and with each its chance to branch.
+  if (flow_[i].length != 1.0f)
+    rate *= std::clamp(targetHalfLength_[i] / std::max(0.5f * s.particleLength, 1e-6f), 0.0f, 1.0f);
   u.halfLength = std::min(a_[i] + 0.5f * rate * gdt, targetHalfLength_[i]);
   u.grown = u.halfLength >= targetHalfLength_[i] * 0.999f;
 
@@ -346,10 +352,13 @@ void ParticleWorld::applyApex(uint32_t i, const ApexUpdate& u, const env::Enviro
   auto windGrowth = [&](uint32_t c, const Quat& deformation) {
     if (!flow.active() && grown.length == 1.0f) return;  // never grew in wind: untouched
     flow_[c] = grown;
-    float half = targetHalfLength_[c] * grown.length;  // spawn() set the species' length
+    const float full = targetHalfLength_[c];  // spawn() set the species' length
+    float half = full * grown.length;
     if (flow.active() && s.growthFlow.maxLength > 0.0f) half = std::min(half, 0.5f * s.growthFlow.maxLength);
     targetHalfLength_[c] = half;
-    a_[c] = std::min(a_[c], half);
+    // It starts as the same share of its length as a still-air particle does, and grows in as
+    // long (decideApex).
+    a_[c] = std::min(a_[c] * (half / std::max(full, 1e-9f)), half);
     if (flow.active()) {
       // The new internode's still-air orientation is its spawned one without the parent's
       // turn; it grows along that turned by the lineage's whole angle α_t (Algorithm 1).
