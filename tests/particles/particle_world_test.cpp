@@ -81,7 +81,8 @@ uint32_t lastParticle(const ParticleWorld& w, uint32_t plant) {
 }
 
 // A horizontal chain of 12 particles grown out of a post, then left to settle (Fig. 12).
-float horizontalSag(float stiffness) {
+// `peakEnergy`, if given, receives the largest kinetic energy once gravity is on.
+float horizontalSag(float stiffness, double* peakEnergy = nullptr) {
   auto env = makeEnv(R"({"obstacles": []})");
   WorldSettings ws;
   ws.plantCollisions = false;
@@ -99,20 +100,33 @@ float horizontalSag(float stiffness) {
   for (int k = 0; k < 200; ++k) w.step(*env);  // the last particle reaches its full length
   // ...then gravity is switched on.
   w.setSettings(ws);
-  for (int k = 0; k < 400; ++k) w.step(*env);
+  double peak = 0.0;
+  for (int k = 0; k < 400; ++k) {
+    w.step(*env);
+    peak = std::max(peak, w.kineticEnergy());
+  }
+  if (peakEnergy) *peakEnergy = peak;
   EXPECT_TRUE(allFinite(w));
   const uint32_t tip = lastParticle(w, p);
   return 1.0f - w.head(tip).y();
 }
 
 TEST(ParticleDynamics, ASoftBranchSagsAndAStiffOneKeepsItsShape) {
-  const float stiff = horizontalSag(1.0f);
-  const float soft = horizontalSag(0.05f);
+  double stiffPeak = 0.0, softPeak = 0.0;
+  const float stiff = horizontalSag(1.0f, &stiffPeak);
+  const float soft = horizontalSag(0.05f, &softPeak);
+  std::printf("tip drop: stiff %.4f m, soft %.4f m; peak kinetic energy: stiff %.3g J, soft %.3g J\n", stiff, soft,
+              stiffPeak, softPeak);
   // The chain is 12 × 5 cm = 60 cm long. Fully stiff it keeps its shape within 6% of its
   // length at the tip (two shape-matching passes per step); at 5% stiffness it hangs down by
   // more than 15 cm.
   EXPECT_LT(std::abs(stiff), 0.036f) << "stiff tip drop";
   EXPECT_GT(soft, 0.15f) << "soft tip drop";
+  // The stiff chain settles without a swing (a peak of 0.65 mJ measured). The soft one whips as
+  // it falls (6 J, tens of metres a second) before it hangs:
+  // the solver's one-way parent frames amplify a soft chain's motion (docs/particles.md, "Known
+  // limits"), so its sag is the end of a whip, not a slow bend.
+  EXPECT_LT(stiffPeak, 0.005) << "stiff peak kinetic energy";
 }
 
 TEST(ParticleGrowth, APlantSeededByAWallClimbsIt) {
