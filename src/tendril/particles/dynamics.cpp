@@ -1,5 +1,6 @@
 // Plant dynamics of seed 000 §4.1 and its appendix: oriented-particle shape matching after
 // Müller & Chentanez 2011.
+#include "tendril/core/log.h"
 #include "tendril/core/parallel.h"
 #include "tendril/core/parallel_largest_first.h"
 #include "tendril/core/match_lanes.h"
@@ -403,6 +404,7 @@ inline void ParticleWorld::matchOne(uint32_t k) {
 void ParticleWorld::integrate() {
   // Eq. 17–20: v = (x_p − x)/Δt, x = x_p, ω = axis(q_p q⁻¹)·angle(q_p q⁻¹)/Δt, q = q_p.
   const float dt = settings_.dt;
+  speedLimited_.assign(capacity(), 0);
   parallelFor(0, capacity(), [&](size_t i) {
     if (!(flags_[i] & kActive)) return;
     const ParticleSpecies& species = plants_[plant_[i]].species;
@@ -435,6 +437,10 @@ void ParticleWorld::integrate() {
     q_[i] = qp_[i];
     v_[i] = v * damping;
     w_[i] = w * damping;
+    if (const float speed = v_[i].norm(); speed > kMaxSpeed) {
+      v_[i] *= kMaxSpeed / speed;
+      speedLimited_[i] = 1;
+    }
     if (!isFinite(x_[i]) || !isFinite(v_[i]) || !isFinite(q_[i]) || !isFinite(w_[i])) {
       // A particle must never carry NaN into the next step: fall back to its rest pose.
       x_[i] = xr_[i];
@@ -443,6 +449,20 @@ void ParticleWorld::integrate() {
     }
     age_[i] += dt;
   }, 512);
+}
+
+void ParticleWorld::reportSpeedLimit() {
+  speedWarned_.resize(plants_.size(), 0);
+  for (uint32_t i = 0; i < speedLimited_.size(); ++i) {
+    if (!speedLimited_[i] || !(flags_[i] & kActive) || plant_[i] >= plants_.size() || speedWarned_[plant_[i]])
+      continue;
+    speedWarned_[plant_[i]] = 1;
+    const Plant& pl = plants_[plant_[i]];
+    log::warn("plant \"{}\": particles reached {} m/s and were held to it (a drag that fast, or the solver "
+              "amplifying the motion of a long free shoot, most at stiffness below 1: here stiffness {}, "
+              "stiffness_start {}; docs/particles.md, \"Known limits\")",
+              pl.name, kMaxSpeed, pl.species.stiffness, pl.species.stiffnessStart);
+  }
 }
 
 void ParticleWorld::breakConnections() {

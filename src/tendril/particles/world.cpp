@@ -452,6 +452,7 @@ void ParticleWorld::step(const env::Environment& env) {
   {
     Timer t;
     integrate();
+    reportSpeedLimit();
     breakConnections();
     updateRestingPieces(env);
     timings_.breaking = t.seconds();

@@ -87,6 +87,12 @@ static_assert(sizeof(AttachedLeaf) == 2 * sizeof(Quat) + 4 * sizeof(float),
 // (not leaves) are the air's bodies, and the air's push is the external acceleration of eq. 1.
 class ParticleWorld final : public models::AirCoupling {
  public:
+  // No particle moves faster (m/s). A plant's parts in a 20 m/s gale move at most at the gale's
+  // speed and a piece falling 3 m reaches 8 m/s; faster is a drag that fast or the solver
+  // amplifying the motion of a long free shoot (docs/particles.md, "Known limits"), which this
+  // bounds (a soft plant would otherwise fly to kilometres, past what the spatial hash's cells
+  // can address).
+  static constexpr float kMaxSpeed = 50.0f;
   explicit ParticleWorld(WorldSettings settings = {});
 
   // --- plants ---
@@ -247,7 +253,10 @@ class ParticleWorld final : public models::AirCoupling {
   void applyAnchors(const env::Environment& env);
   void collideObstacles(const env::Environment& env);
   void collideParticles();
+  // Eq. 17–20, each particle's speed held to kMaxSpeed (speedLimited_ marks those held).
   void integrate();
+  // Warns once per plant whose particles were held to kMaxSpeed (see integrate()).
+  void reportSpeedLimit();
   void breakConnections();
   void updateRestingPieces(const env::Environment& env);
   // Broken-off particles this far (m) below the lowest obstacle and plant root have fallen off
@@ -312,6 +321,8 @@ class ParticleWorld final : public models::AirCoupling {
 
   // Scratch for the parallel passes.
   std::vector<Vec3> goal_, correction_;
+  std::vector<uint8_t> speedLimited_;  // integrate(): held to kMaxSpeed this step
+  std::vector<uint8_t> speedWarned_;   // per plant: reportSpeedLimit() has warned
   // Obstacle collisions: what the last distance samples of each particle proved about the
   // field around it, valid while the obstacles stay where they were (see collideObstacles()).
   struct Clearance {
