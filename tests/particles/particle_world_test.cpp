@@ -81,26 +81,35 @@ uint32_t lastParticle(const ParticleWorld& w, uint32_t plant) {
   return best;
 }
 
-// A horizontal chain of 12 particles grown out of a post, then left to settle (Fig. 12).
-// `peakEnergy`, if given, receives the largest kinetic energy once gravity is on.
+// A bare chain of `particles` grown along +x out of a post at (0, 1, 0) at full stiffness from
+// birth and without gravity, so that its rest shape is the straight line, then given the
+// stiffness `stiffness`. The world's settings (plant collisions off) are restored, gravity
+// with them; returns the plant.
+uint32_t growStraightChain(ParticleWorld& w, const env::Environment& env, const std::string& name, int particles,
+                           float stiffness, int maxSteps) {
+  const WorldSettings ws = w.settings();
+  ParticleSpecies s = chainSpecies(particles);
+  s.stiffness = stiffness;
+  s.stiffnessStart = 1.0f;
+  WorldSettings still = ws;
+  still.gravity = Vec3::Zero();
+  w.setSettings(still);
+  const uint32_t p = w.addPlant(name, s, Vec3(0, 1, 0), Vec3(1, 0, 0), 1, env);
+  for (int k = 0; k < maxSteps && stemCount(w, p) < size_t(particles); ++k) w.step(env);
+  EXPECT_EQ(stemCount(w, p), size_t(particles));
+  for (int k = 0; k < 200; ++k) w.step(env);  // the last particle reaches its full length
+  w.setSettings(ws);
+  return p;
+}
+
+// A horizontal chain of 12 particles grown out of a post, then left to settle under gravity
+// (Fig. 12). `peakEnergy`, if given, receives the largest kinetic energy once gravity is on.
 float horizontalSag(float stiffness, double* peakEnergy = nullptr) {
   auto env = makeEnv(R"({"obstacles": []})");
   WorldSettings ws;
   ws.plantCollisions = false;
   ParticleWorld w(ws);
-  ParticleSpecies s = chainSpecies(12);
-  s.stiffness = stiffness;
-  s.stiffnessStart = 1.0f;  // full stiffness from birth: the rest shape is the straight line
-  // Grown without gravity, so that the rest shape is straight...
-  WorldSettings still = ws;
-  still.gravity = Vec3::Zero();
-  w.setSettings(still);
-  uint32_t p = w.addPlant("branch", s, Vec3(0, 1, 0), Vec3(1, 0, 0), 1, *env);
-  for (int k = 0; k < 2000 && stemCount(w, p) < 12; ++k) w.step(*env);
-  EXPECT_EQ(stemCount(w, p), 12u);
-  for (int k = 0; k < 200; ++k) w.step(*env);  // the last particle reaches its full length
-  // ...then gravity is switched on.
-  w.setSettings(ws);
+  const uint32_t p = growStraightChain(w, *env, "branch", 12, stiffness, 2000);
   double peak = 0.0;
   for (int k = 0; k < 400; ++k) {
     w.step(*env);
@@ -139,16 +148,8 @@ TEST(ParticleDynamics, TheSpeedLimitBoundsAnAmplifiedSoftChainAndSaysSo) {
   WorldSettings ws;
   ws.plantCollisions = false;
   ParticleWorld w(ws);
-  ParticleSpecies s = chainSpecies(40);
-  s.stiffness = 0.4f;
-  WorldSettings still = ws;
-  still.gravity = Vec3::Zero();
-  w.setSettings(still);
-  uint32_t p = w.addPlant("soft chain", s, Vec3(0, 1, 0), Vec3(1, 0, 0), 1, *env);
-  for (int k = 0; k < 3000 && stemCount(w, p) < 40; ++k) w.step(*env);
+  const uint32_t p = growStraightChain(w, *env, "soft chain", 40, 0.4f, 3000);
   ASSERT_EQ(stemCount(w, p), 40u);
-  for (int k = 0; k < 200; ++k) w.step(*env);
-  w.setSettings(ws);
   std::vector<std::string> warnings;
   float fastest = 0.0f, farthest = 0.0f;
   {
